@@ -1,0 +1,136 @@
+//! The triangle soup every accelerator is built from.
+
+use super::Aabb;
+use glam::Vec3;
+
+/// Triangles over a shared vertex buffer. Winding is counter-clockwise seen from the front:
+/// the geometric normal is `normalize((v1 - v0) x (v2 - v0))`.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// Why a mesh cannot be used for ray casting.
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum MeshError {
+    #[error("vertex {index} has a non-finite coordinate {value:?}")]
+    NonFiniteVertex { index: usize, value: [f32; 3] },
+    #[error("triangle {triangle} uses vertex {vertex}, but there are only {count} vertices")]
+    IndexOutOfRange { triangle: usize, vertex: u32, count: usize },
+    #[error("{0} triangles is more than the 2^32 - 1 a mesh may hold")]
+    TooManyTriangles(usize),
+}
+
+impl TriangleMesh {
+    /// Checks that every coordinate is finite and every index is in range.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if self.indices.len() >= u32::MAX as usize || self.positions.len() >= u32::MAX as usize {
+            return Err(MeshError::TooManyTriangles(self.indices.len()));
+        }
+        if let Some((index, p)) = self.positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(MeshError::NonFiniteVertex { index, value: p.to_array() });
+        }
+        let count = self.positions.len();
+        for (triangle, tri) in self.indices.iter().enumerate() {
+            if let Some(&vertex) = tri.iter().find(|&&v| v as usize >= count) {
+                return Err(MeshError::IndexOutOfRange { triangle, vertex, count });
+            }
+        }
+        Ok(())
+    }
+
+    pub fn len(&self) -> usize {
+        self.indices.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.indices.is_empty()
+    }
+
+    /// The three corners of triangle `i`.
+    #[inline]
+    pub fn triangle(&self, i: u32) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i as usize];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Unnormalised geometric normal `(v1 - v0) x (v2 - v0)`; its length is twice the area.
+    #[inline]
+    pub fn normal_unnormalized(&self, i: u32) -> Vec3 {
+        let [a, b, c] = self.triangle(i);
+        (b - a).cross(c - a)
+    }
+
+    /// Unit geometric normal, or `None` for a degenerate triangle (zero or non-finite area).
+    pub fn normal(&self, i: u32) -> Option<Vec3> {
+        let n = self.normal_unnormalized(i);
+        let len = n.length();
+        (len > 0.0 && len.is_finite()).then(|| n / len)
+    }
+
+    pub fn area(&self, i: u32) -> f32 {
+        0.5 * self.normal_unnormalized(i).length()
+    }
+
+    /// Point at barycentrics `(u, v)`: `(1 - u - v) v0 + u v1 + v v2` (Embree's convention).
+    #[inline]
+    pub fn point(&self, i: u32, u: f32, v: f32) -> Vec3 {
+        let [a, b, c] = self.triangle(i);
+        (1.0 - u - v) * a + u * b + v * c
+    }
+
+    pub fn bounds(&self) -> Aabb {
+        self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &v| b.grow(self.positions[v as usize]))
+    }
+
+    /// Appends another mesh, offsetting its indices.
+    pub fn append(&mut self, other: &TriangleMesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.indices.extend(other.indices.iter().map(|t| t.map(|v| v + base)));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn quad() -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+        }
+    }
+
+    #[test]
+    fn normals_area_and_points() {
+        let m = quad();
+        assert_eq!(m.normal(0), Some(Vec3::Z));
+        assert_eq!(m.area(0) + m.area(1), 1.0);
+        assert_eq!(m.point(0, 1.0, 0.0), Vec3::X);
+        assert_eq!(m.bounds().max, Vec3::new(1.0, 1.0, 0.0));
+        let degenerate =
+            TriangleMesh { positions: vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0], indices: vec![[0, 1, 2]] };
+        assert_eq!(degenerate.normal(0), None);
+    }
+
+    #[test]
+    fn validate_rejects_bad_indices_and_nan() {
+        let mut m = quad();
+        assert!(m.validate().is_ok());
+        m.indices.push([0, 1, 7]);
+        assert_eq!(m.validate(), Err(MeshError::IndexOutOfRange { triangle: 2, vertex: 7, count: 4 }));
+        let mut m = quad();
+        m.positions[1].y = f32::NAN;
+        assert!(matches!(m.validate(), Err(MeshError::NonFiniteVertex { index: 1, .. })));
+    }
+
+    #[test]
+    fn append_offsets_indices() {
+        let mut m = quad();
+        m.append(&quad());
+        assert_eq!(m.indices[3], [4, 6, 7]);
+        assert!(m.validate().is_ok());
+    }
+}

@@ -1,0 +1,14 @@
+//! photonmap: a photon-mapping renderer (Jensen's two-pass method) with Debian's Embree or a
+//! pure-Rust BVH for ray casting.
+//!
+//! Layout: [`geometry`] (rays, boxes, meshes, robust offsets), [`accel`] (ray-casting backends
+//! behind one trait), [`scene`] (TOML scene files with OBJ/MTL geometry), [`material`] and
+//! [`light`] (what surfaces and emitters do).
+//!
+//! All `unsafe` code lives in `accel::embree`; everything else is safe Rust.
+#![deny(unsafe_code)]
+
+pub mod accel;
+pub mod geometry;
+pub mod light;
+pub mod material;
