@@ -9,6 +9,9 @@
 #![deny(unsafe_code)]
 
 pub mod accel;
+pub mod config;
 pub mod geometry;
 pub mod light;
 pub mod material;
+pub mod scene;
+pub mod film;

@@ -1,0 +1,195 @@
+//! The film: a float RGB image of mean radiance per pixel, written as OpenEXR (float32 R, G, B,
+//! row 0 at the top) and as a tone-mapped sRGB PNG preview. Files are written atomically: to a
+//! temporary file beside the target, then renamed over it, so an existing image is only ever
+//! replaced by a complete new one.
+
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+
+/// A `width × height` RGB image, row-major from the top-left pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Film {
+    pub width: usize,
+    pub height: usize,
+    pub pixels: Vec<Vec3>,
+}
+
+/// Why an image could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: std::io::Error },
+    #[error("{}: {message}", path.display())]
+    Format { path: PathBuf, message: String },
+}
+
+impl Film {
+    pub fn new(width: usize, height: usize) -> Self {
+        Film { width, height, pixels: vec![Vec3::ZERO; width * height] }
+    }
+
+    #[inline]
+    pub fn get(&self, x: usize, y: usize) -> Vec3 {
+        self.pixels[y * self.width + x]
+    }
+
+    /// Number of pixels with a NaN or infinite channel.
+    pub fn nonfinite_count(&self) -> usize {
+        self.pixels.iter().filter(|p| !p.is_finite()).count()
+    }
+
+    /// Mean over all pixels and channels.
+    pub fn mean(&self) -> f64 {
+        let sum: f64 = self.pixels.iter().map(|p| p.x as f64 + p.y as f64 + p.z as f64).sum();
+        sum / (3 * self.pixels.len()).max(1) as f64
+    }
+
+    /// Box-downsamples by an integer `factor` (each output pixel is the mean of a block).
+    pub fn downsample(&self, factor: usize) -> Film {
+        assert!(factor >= 1 && self.width % factor == 0 && self.height % factor == 0, "factor must divide the size");
+        let (w, h) = (self.width / factor, self.height / factor);
+        let mut out = Film::new(w, h);
+        for y in 0..h {
+            for x in 0..w {
+                let mut sum = Vec3::ZERO;
+                for dy in 0..factor {
+                    for dx in 0..factor {
+                        sum += self.get(x * factor + dx, y * factor + dy);
+                    }
+                }
+                out.pixels[y * w + x] = sum / (factor * factor) as f32;
+            }
+        }
+        out
+    }
+
+    /// Writes float32 RGB OpenEXR atomically.
+    pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        atomic_write(path, |tmp| {
+            exr::prelude::write_rgb_file(tmp, self.width, self.height, |x, y| {
+                let p = self.get(x, y);
+                (p.x, p.y, p.z)
+            })
+            .map_err(|e| e.to_string())
+        })
+    }
+
+    /// Writes an 8-bit sRGB PNG preview (radiance clamped to [0, 1], sRGB transfer curve)
+    /// atomically.
+    pub fn write_png(&self, path: &Path) -> Result<(), ImageError> {
+        let bytes: Vec<u8> = self.pixels.iter().flat_map(|p| p.to_array().map(srgb8)).collect();
+        atomic_write(path, |tmp| {
+            let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
+            let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width as u32, self.height as u32);
+            enc.set_color(png::ColorType::Rgb);
+            enc.set_depth(png::BitDepth::Eight);
+            let mut w = enc.write_header().map_err(|e| e.to_string())?;
+            w.write_image_data(&bytes).map_err(|e| e.to_string())?;
+            w.finish().map_err(|e| e.to_string())
+        })
+    }
+
+    /// Reads the first RGB(A) layer of an OpenEXR file.
+    pub fn read_exr(path: &Path) -> Result<Film, ImageError> {
+        let image = exr::prelude::read_first_rgba_layer_from_file(
+            path,
+            |size, _| Film::new(size.width(), size.height()),
+            |film: &mut Film, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+                let w = film.width;
+                film.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
+            },
+        )
+        .map_err(|e| ImageError::Format { path: path.to_owned(), message: e.to_string() })?;
+        Ok(image.layer_data.channel_data.pixels)
+    }
+}
+
+/// sRGB transfer curve of a linear value clamped to [0, 1], to 8 bits.
+fn srgb8(v: f32) -> u8 {
+    let v = if v.is_finite() { v.clamp(0.0, 1.0) } else { 0.0 };
+    let s = if v <= 0.003_130_8 { 12.92 * v } else { 1.055 * v.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// Runs `write` on a temporary path in the target's directory, then renames it over `path`.
+/// On failure the temporary file is removed and `path` is left untouched.
+fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
+    let name = path.file_name().ok_or_else(|| ImageError::Format {
+        path: path.to_owned(),
+        message: "not a file name".into(),
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".{}.tmp", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    let result = write(&tmp).map_err(|message| ImageError::Format { path: path.to_owned(), message });
+    let result = result.and_then(|_| {
+        std::fs::rename(&tmp, path).map_err(|source| ImageError::Io { path: path.to_owned(), source })
+    });
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}
+
+/// Error of `a` against reference `b`: RMSE over all pixels and channels, and relative MSE
+/// `mean((a - b)^2 / (b^2 + 0.01))` (the metric of `SCENES.md`).
+pub fn compare(a: &Film, b: &Film) -> Option<(f64, f64)> {
+    if a.width != b.width || a.height != b.height {
+        return None;
+    }
+    let (mut se, mut rel) = (0.0f64, 0.0f64);
+    for (p, q) in a.pixels.iter().zip(&b.pixels) {
+        for c in 0..3 {
+            let (x, r) = (p[c] as f64, q[c] as f64);
+            se += (x - r) * (x - r);
+            rel += (x - r) * (x - r) / (r * r + 0.01);
+        }
+    }
+    let n = (3 * a.pixels.len()) as f64;
+    Some(((se / n).sqrt(), rel / n))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact_and_atomic() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        let mut f = Film::new(5, 3);
+        for (i, p) in f.pixels.iter_mut().enumerate() {
+            *p = Vec3::new(i as f32, 0.5 * i as f32, 1e-3);
+        }
+        f.write_exr(&path).unwrap();
+        assert_eq!(Film::read_exr(&path).unwrap(), f);
+        // Only the final file is left behind.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        f.write_png(&dir.path().join("a.png")).unwrap();
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+    }
+
+    #[test]
+    fn failed_write_leaves_the_old_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        std::fs::write(&path, b"old").unwrap();
+        let r = atomic_write(&path, |_| Err("boom".into()));
+        assert!(r.is_err());
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn metrics_and_downsampling() {
+        let mut a = Film::new(2, 2);
+        let b = Film::new(2, 2);
+        a.pixels[0] = Vec3::splat(2.0);
+        let (rmse, _) = compare(&a, &b).unwrap();
+        assert!((rmse - 1.0).abs() < 1e-12);
+        assert_eq!(a.downsample(2).pixels[0], Vec3::splat(0.5));
+        assert_eq!(srgb8(1.0), 255);
+        assert_eq!(srgb8(f32::NAN), 0);
+    }
+}

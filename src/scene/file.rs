@@ -1,0 +1,146 @@
+//! The TOML scene file: its schema (serde, unknown keys rejected) and the checks on its values.
+
+use super::SceneError;
+use crate::config::RenderSettings;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The scene file as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    pub camera: CameraEntry,
+    #[serde(default, rename = "mesh")]
+    pub meshes: Vec<MeshEntry>,
+    #[serde(default)]
+    pub materials: BTreeMap<String, MaterialEntry>,
+    #[serde(default, rename = "light")]
+    pub lights: Vec<LightEntry>,
+    #[serde(default)]
+    pub render: RenderSettings,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraEntry {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub up: [f32; 3],
+    pub vfov_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// A scale given as one number or per axis.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(untagged)]
+pub enum Scale {
+    Uniform(f32),
+    PerAxis([f32; 3]),
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshEntry {
+    /// Path of the OBJ file, relative to the scene file.
+    pub obj: PathBuf,
+    /// Material for every face of this mesh, replacing the OBJ's `usemtl`.
+    pub material: Option<String>,
+    /// Applied to the vertices before `translate`.
+    pub scale: Option<Scale>,
+    pub translate: Option<[f32; 3]>,
+}
+
+/// Material kinds a scene file may name.
+#[derive(Debug, Deserialize, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum MaterialKind {
+    Diffuse,
+    Glossy,
+    Mirror,
+    Glass,
+    Emissive,
+}
+
+/// `[materials.NAME]`: sets the material of that name, or overrides fields of the MTL's.
+#[derive(Debug, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialEntry {
+    #[serde(rename = "type")]
+    pub kind: Option<MaterialKind>,
+    pub kd: Option<[f32; 3]>,
+    pub ks: Option<[f32; 3]>,
+    pub ns: Option<f32>,
+    pub ior: Option<f32>,
+    pub ke: Option<[f32; 3]>,
+}
+
+/// `[[light]]`: explicit lights (emissive materials are area lights already).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightEntry {
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        intensity: [f32; 3],
+        cone_deg: f32,
+        #[serde(default)]
+        falloff_deg: f32,
+    },
+    Distant {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+}
+
+impl SceneFile {
+    /// Parses the TOML text of `path`; syntax and schema errors carry line and column.
+    pub fn parse(path: &Path, text: &str) -> Result<Self, SceneError> {
+        toml::from_str(text).map_err(|e| {
+            let mut message = e.message().trim().to_owned();
+            if let Some(span) = e.span() {
+                let before = &text[..span.start.min(text.len())];
+                let line = before.matches('\n').count() + 1;
+                let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
+                message = format!("line {line}, column {column}: {message}");
+            }
+            SceneError::Toml { path: path.to_owned(), message }
+        })
+    }
+}
+
+/// Checks that `v` is finite, naming `field` otherwise.
+pub fn finite3(path: &Path, field: &str, v: [f32; 3]) -> Result<glam::Vec3, SceneError> {
+    if v.iter().all(|x| x.is_finite()) {
+        Ok(glam::Vec3::from(v))
+    } else {
+        Err(SceneError::field(path, field, format!("{v:?} is not finite")))
+    }
+}
+
+/// Checks that `v` is finite and non-negative.
+pub fn nonneg3(path: &Path, field: &str, v: [f32; 3]) -> Result<glam::Vec3, SceneError> {
+    let v = finite3(path, field, v)?;
+    if v.min_element() < 0.0 {
+        return Err(SceneError::field(path, field, format!("{:?} has a negative component", v.to_array())));
+    }
+    Ok(v)
+}
+
+/// Checks a reflectance: every component in [0, 1].
+pub fn reflectance3(path: &Path, field: &str, v: [f32; 3]) -> Result<glam::Vec3, SceneError> {
+    let v = nonneg3(path, field, v)?;
+    if v.max_element() > 1.0 {
+        return Err(SceneError::field(
+            path,
+            field,
+            format!("{:?} exceeds 1: a surface cannot reflect more than it receives", v.to_array()),
+        ));
+    }
+    Ok(v)
+}

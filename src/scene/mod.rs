@@ -1,0 +1,326 @@
+//! Scenes: a TOML file (camera, meshes, material overrides, lights, render settings) with
+//! geometry and materials from Wavefront OBJ/MTL. Conventions are those of `SCENES.md`: metres,
+//! right-handed +Y up, counter-clockwise front faces, flat shading.
+//!
+//! Loading validates everything up front and reports the file and the line or field at fault.
+
+mod camera;
+mod error;
+mod file;
+mod obj;
+
+pub use camera::Camera;
+pub use error::SceneError;
+pub use file::{LightEntry, MaterialEntry, MaterialKind, SceneFile};
+pub use obj::MtlMaterial;
+
+use crate::config::RenderSettings;
+use crate::geometry::{Aabb, TriangleMesh};
+use crate::light::LightDesc;
+use crate::material::Material;
+use file::{finite3, nonneg3, reflectance3, Scale};
+use glam::Vec3;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Largest image side accepted (a 16k × 16k float RGB film is 3 GiB).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+/// A loaded, validated scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub path: PathBuf,
+    pub camera: Camera,
+    pub mesh: TriangleMesh,
+    /// Material index of each triangle.
+    pub tri_material: Vec<u32>,
+    pub materials: Vec<Material>,
+    pub material_names: Vec<String>,
+    pub lights: Vec<LightDesc>,
+    pub render: RenderSettings,
+}
+
+impl Scene {
+    /// Loads the scene file at `path` and everything it references.
+    pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path)
+            .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+        Scene::from_str(path, &text)
+    }
+
+    /// Builds a scene from TOML `text`; paths inside are relative to `path`'s directory.
+    pub fn from_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
+        let file = SceneFile::parse(path, text)?;
+        let camera = camera(path, &file.camera)?;
+        if file.meshes.is_empty() {
+            return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
+        }
+        let mut mesh = TriangleMesh::default();
+        let mut tri_names: Vec<Option<String>> = Vec::new();
+        let mut mtl: HashMap<String, MtlMaterial> = HashMap::new();
+        for (i, entry) in file.meshes.iter().enumerate() {
+            let obj_path = obj::relative_to(path, &entry.obj);
+            let mut data = obj::load_obj(&obj_path)?;
+            transform(path, i, entry, &mut data.mesh)?;
+            if let Some(m) = &entry.material {
+                tri_names.extend(std::iter::repeat_n(Some(m.clone()), data.mesh.len()));
+            } else {
+                tri_names.extend(data.tri_material);
+            }
+            for (name, line) in &data.used {
+                if entry.material.is_none()
+                    && !file.materials.contains_key(name)
+                    && !data.materials.iter().any(|(n, _)| n == name)
+                {
+                    return Err(SceneError::Line {
+                        path: obj_path.clone(),
+                        line: *line,
+                        message: format!(
+                            "usemtl {name}: defined neither in the MTL nor in the scene file's [materials]"
+                        ),
+                    });
+                }
+            }
+            for (name, m) in data.materials {
+                mtl.entry(name).or_insert(m);
+            }
+            mesh.append(&data.mesh);
+        }
+        mesh.validate().map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
+        let (tri_material, materials, material_names) = resolve_materials(path, &tri_names, &mtl, &file)?;
+        let lights =
+            file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
+        validate_render(path, &file.render)?;
+        Ok(Scene {
+            path: path.to_owned(),
+            camera,
+            mesh,
+            tri_material,
+            materials,
+            material_names,
+            lights,
+            render: file.render,
+        })
+    }
+
+    /// Bounds of all triangles.
+    pub fn bounds(&self) -> Aabb {
+        self.mesh.bounds()
+    }
+
+    /// The material of triangle `prim`.
+    #[inline]
+    pub fn material(&self, prim: u32) -> &Material {
+        &self.materials[self.tri_material[prim as usize] as usize]
+    }
+}
+
+fn camera(path: &Path, c: &file::CameraEntry) -> Result<Camera, SceneError> {
+    let eye = finite3(path, "camera.eye", c.eye)?;
+    let target = finite3(path, "camera.target", c.target)?;
+    let up = finite3(path, "camera.up", c.up)?;
+    if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
+        return Err(SceneError::field(path, "camera.vfov_deg", format!("{} is not in (0, 180)", c.vfov_deg)));
+    }
+    for (name, v) in [("camera.width", c.width), ("camera.height", c.height)] {
+        if v == 0 || v > MAX_IMAGE_SIDE {
+            return Err(SceneError::field(path, name, format!("{v} is not in 1..={MAX_IMAGE_SIDE}")));
+        }
+    }
+    Camera::look_at(eye, target, up, c.vfov_deg, c.width, c.height).ok_or_else(|| {
+        SceneError::field(
+            path,
+            "camera",
+            "degenerate view: eye equals target or up is parallel to the view direction",
+        )
+    })
+}
+
+fn transform(
+    path: &Path,
+    i: usize,
+    entry: &file::MeshEntry,
+    mesh: &mut TriangleMesh,
+) -> Result<(), SceneError> {
+    let scale = match entry.scale {
+        None => Vec3::ONE,
+        Some(Scale::Uniform(s)) => Vec3::splat(s),
+        Some(Scale::PerAxis(s)) => Vec3::from(s),
+    };
+    if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+        return Err(SceneError::field(path, format!("mesh[{i}].scale"), "must be finite and non-zero"));
+    }
+    let translate = finite3(path, &format!("mesh[{i}].translate"), entry.translate.unwrap_or([0.0; 3]))?;
+    let mirrored = scale.x * scale.y * scale.z < 0.0;
+    for p in &mut mesh.positions {
+        *p = *p * scale + translate;
+    }
+    if mirrored {
+        // A mirroring scale flips the winding; restore counter-clockwise front faces.
+        for t in &mut mesh.indices {
+            t.swap(1, 2);
+        }
+    }
+    Ok(())
+}
+
+/// Resolves every triangle's material name to an index, merging MTL materials with the scene
+/// file's `[materials.NAME]` entries (the file wins, field by field).
+fn resolve_materials(
+    path: &Path,
+    tri_names: &[Option<String>],
+    mtl: &HashMap<String, MtlMaterial>,
+    file: &SceneFile,
+) -> Result<(Vec<u32>, Vec<Material>, Vec<String>), SceneError> {
+    let mut index: HashMap<Option<&str>, u32> = HashMap::new();
+    let mut materials = Vec::new();
+    let mut names = Vec::new();
+    let mut tri_material = Vec::with_capacity(tri_names.len());
+    for name in tri_names {
+        let key = name.as_deref();
+        let id = match index.get(&key) {
+            Some(&id) => id,
+            None => {
+                let m = match key {
+                    None => Material::Diffuse { kd: Vec3::splat(0.8) },
+                    Some(n) => material(path, n, mtl.get(n), file.materials.get(n))?,
+                };
+                let id = materials.len() as u32;
+                materials.push(m);
+                names.push(key.unwrap_or("(default grey)").to_owned());
+                index.insert(key, id);
+                id
+            }
+        };
+        tri_material.push(id);
+    }
+    Ok((tri_material, materials, names))
+}
+
+/// One material from its MTL entry and/or scene-file entry.
+fn material(
+    path: &Path,
+    name: &str,
+    mtl: Option<&MtlMaterial>,
+    entry: Option<&MaterialEntry>,
+) -> Result<Material, SceneError> {
+    if mtl.is_none() && entry.is_none() {
+        return Err(SceneError::field(
+            path,
+            format!("materials.{name}"),
+            "used by the mesh but defined neither in its MTL nor in the scene file",
+        ));
+    }
+    let empty = MtlMaterial::default();
+    let mtl = mtl.unwrap_or(&empty);
+    let none = MaterialEntry::default();
+    let e = entry.unwrap_or(&none);
+    let field = |f: &str| format!("materials.{name}.{f}");
+    let kd = e.kd.or(mtl.kd).unwrap_or([0.0; 3]);
+    let ks = e.ks.or(mtl.ks).unwrap_or([0.0; 3]);
+    let ke = e.ke.or(mtl.ke).unwrap_or([0.0; 3]);
+    let kind = e.kind.unwrap_or_else(|| mtl_kind(mtl));
+    let m = match kind {
+        MaterialKind::Diffuse => Material::Diffuse { kd: reflectance3(path, &field("kd"), kd)? },
+        MaterialKind::Glossy => {
+            let kd = reflectance3(path, &field("kd"), kd)?;
+            let ks = reflectance3(path, &field("ks"), ks)?;
+            if (kd + ks).max_element() > 1.0 {
+                return Err(SceneError::field(path, field("ks"), "kd + ks exceeds 1: not energy conserving"));
+            }
+            let ns =
+                e.ns.or(mtl.ns).ok_or_else(|| SceneError::field(path, field("ns"), "glossy needs ns"))?;
+            if !(ns.is_finite() && ns >= 0.0 && ns <= 1e6) {
+                return Err(SceneError::field(path, field("ns"), format!("{ns} is not in [0, 1e6]")));
+            }
+            Material::Glossy { kd, ks, ns }
+        }
+        MaterialKind::Mirror => {
+            let ks = if e.ks.is_none() && mtl.ks.is_none() { [1.0; 3] } else { ks };
+            Material::Mirror { ks: reflectance3(path, &field("ks"), ks)? }
+        }
+        MaterialKind::Glass => {
+            let ior = e.ior.or(mtl.ni).unwrap_or(1.5);
+            if !(ior.is_finite() && ior > 0.0 && ior < 100.0) {
+                return Err(SceneError::field(path, field("ior"), format!("{ior} is not in (0, 100)")));
+            }
+            Material::Glass { ior }
+        }
+        MaterialKind::Emissive => Material::Emissive {
+            kd: reflectance3(path, &field("kd"), kd)?,
+            ke: nonneg3(path, &field("ke"), ke)?,
+        },
+    };
+    Ok(m)
+}
+
+/// The MTL mapping: `Ke` → emissive; `illum 3/5` → mirror; `illum 4/6/7` → glass; `illum 2`
+/// with `Ks` and `Ns` → glossy; otherwise diffuse.
+fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
+    let nonzero = |v: Option<[f32; 3]>| v.is_some_and(|v| v.iter().any(|&x| x > 0.0));
+    if nonzero(m.ke) {
+        return MaterialKind::Emissive;
+    }
+    match m.illum {
+        Some(3) | Some(5) => MaterialKind::Mirror,
+        Some(4) | Some(6) | Some(7) => MaterialKind::Glass,
+        Some(2) if nonzero(m.ks) && m.ns.is_some() => MaterialKind::Glossy,
+        _ => MaterialKind::Diffuse,
+    }
+}
+
+fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError> {
+    let f = |name: &str| format!("light[{i}].{name}");
+    let unit = |name: &str, v: [f32; 3]| -> Result<Vec3, SceneError> {
+        finite3(path, &f(name), v)?
+            .try_normalize()
+            .ok_or_else(|| SceneError::field(path, f(name), "zero vector"))
+    };
+    Ok(match *l {
+        LightEntry::Point { position, intensity } => LightDesc::Point {
+            position: finite3(path, &f("position"), position)?,
+            intensity: nonneg3(path, &f("intensity"), intensity)?,
+        },
+        LightEntry::Spot { position, direction, intensity, cone_deg, falloff_deg } => {
+            if !(cone_deg > 0.0 && cone_deg <= 180.0) {
+                return Err(SceneError::field(path, f("cone_deg"), format!("{cone_deg} is not in (0, 180]")));
+            }
+            if !(falloff_deg >= 0.0 && falloff_deg <= cone_deg) {
+                return Err(SceneError::field(
+                    path,
+                    f("falloff_deg"),
+                    format!("{falloff_deg} is not in [0, cone_deg]"),
+                ));
+            }
+            LightDesc::Spot {
+                position: finite3(path, &f("position"), position)?,
+                direction: unit("direction", direction)?,
+                intensity: nonneg3(path, &f("intensity"), intensity)?,
+                cone_deg,
+                falloff_deg,
+            }
+        }
+        LightEntry::Distant { direction, irradiance } => LightDesc::Distant {
+            direction: unit("direction", direction)?,
+            irradiance: nonneg3(path, &f("irradiance"), irradiance)?,
+        },
+    })
+}
+
+/// Refuses settings that cannot be honoured, before any work is done.
+fn validate_render(path: &Path, r: &RenderSettings) -> Result<(), SceneError> {
+    for (name, v) in
+        [("render.gather_radius", r.gather_radius), ("render.caustic_gather_radius", r.caustic_gather_radius)]
+    {
+        if let Some(v) = v {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(SceneError::field(path, name, format!("{v} must be finite and positive")));
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests;
