@@ -84,3 +84,126 @@ impl RenderSettings {
         )
     }
 }
+
+/// A complete, validated set of render settings.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RenderConfig {
+    pub accel: AccelKind,
+    pub robust: bool,
+    pub width: u32,
+    pub height: u32,
+    /// Photons emitted for the indirect map (all channels together).
+    pub photons: u64,
+    /// Photons emitted toward specular objects for the caustic map.
+    pub caustic_photons: u64,
+    pub spp: u32,
+    pub seed: u64,
+    /// Longest photon path (bounces after emission).
+    pub max_bounces: u32,
+    /// Longest camera path through mirrors and glass.
+    pub max_depth: u32,
+    pub gather_photons: u32,
+    /// `None`: chosen from the scene size.
+    pub gather_radius: Option<f32>,
+    pub caustic_gather_photons: u32,
+    pub caustic_gather_radius: Option<f32>,
+    pub indirect: IndirectMode,
+    pub final_gather_rays: u32,
+    pub color: ColorMode,
+    pub kernel: Kernel,
+    pub light_samples: u32,
+}
+
+/// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
+pub const BYTES_PER_PHOTON: u64 = 20;
+/// Photon budgets above this are refused (10^9 photons would need about 20 GB).
+pub const MAX_PHOTONS: u64 = 500_000_000;
+
+/// A setting that cannot be honoured.
+#[derive(Debug, thiserror::Error)]
+#[error("{field}: {message}")]
+pub struct ConfigError {
+    pub field: &'static str,
+    pub message: String,
+}
+
+fn bad(field: &'static str, message: impl Into<String>) -> ConfigError {
+    ConfigError { field, message: message.into() }
+}
+
+impl RenderSettings {
+    /// Fills defaults and validates. `width`/`height` come from the camera unless overridden.
+    pub fn resolve(&self, width: u32, height: u32) -> Result<RenderConfig, ConfigError> {
+        let c = RenderConfig {
+            accel: self.accel.unwrap_or_else(AccelKind::default_kind),
+            robust: self.robust.unwrap_or(true),
+            width,
+            height,
+            photons: self.photons.unwrap_or(300_000),
+            caustic_photons: self.caustic_photons.unwrap_or(300_000),
+            spp: self.spp.unwrap_or(16),
+            seed: self.seed.unwrap_or(1),
+            max_bounces: self.max_bounces.unwrap_or(64),
+            max_depth: self.max_depth.unwrap_or(16),
+            gather_photons: self.gather_photons.unwrap_or(100),
+            gather_radius: self.gather_radius,
+            caustic_gather_photons: self.caustic_gather_photons.unwrap_or(60),
+            caustic_gather_radius: self.caustic_gather_radius,
+            indirect: self.indirect.unwrap_or(IndirectMode::Estimate),
+            final_gather_rays: self.final_gather_rays.unwrap_or(32),
+            color: self.color.unwrap_or(ColorMode::PerChannel),
+            kernel: self.kernel.unwrap_or(Kernel::Cone),
+            light_samples: self.light_samples.unwrap_or(1),
+        };
+        c.validate()?;
+        Ok(c)
+    }
+}
+
+impl RenderConfig {
+    fn validate(&self) -> Result<(), ConfigError> {
+        let side = crate::scene::MAX_IMAGE_SIDE;
+        if self.width == 0 || self.height == 0 || self.width > side || self.height > side {
+            return Err(bad("width/height", format!("{}x{} is not within 1..={side} per side", self.width, self.height)));
+        }
+        for (field, n) in [("photons", self.photons), ("caustic_photons", self.caustic_photons)] {
+            if n > MAX_PHOTONS {
+                let gb = (n as f64 * BYTES_PER_PHOTON as f64) / 1e9;
+                return Err(bad(
+                    field,
+                    format!("{n} photons would need about {gb:.0} GB for the map alone; at most {MAX_PHOTONS}"),
+                ));
+            }
+        }
+        let pixels = self.width as u64 * self.height as u64;
+        if self.spp == 0 || self.spp > 1 << 20 {
+            return Err(bad("spp", format!("{} is not in 1..=1048576", self.spp)));
+        }
+        if pixels * self.spp as u64 > 1 << 40 {
+            return Err(bad("spp", "width x height x spp exceeds 2^40 camera samples"));
+        }
+        if self.gather_photons == 0 || self.gather_photons > 10_000 {
+            return Err(bad("gather_photons", format!("{} is not in 1..=10000", self.gather_photons)));
+        }
+        if self.caustic_gather_photons == 0 || self.caustic_gather_photons > 10_000 {
+            return Err(bad("caustic_gather_photons", format!("{} is not in 1..=10000", self.caustic_gather_photons)));
+        }
+        for (field, r) in [("gather_radius", self.gather_radius), ("caustic_gather_radius", self.caustic_gather_radius)] {
+            if let Some(r) = r {
+                if !(r.is_finite() && r > 0.0) {
+                    return Err(bad(field, format!("{r} must be finite and positive")));
+                }
+            }
+        }
+        if self.final_gather_rays == 0 || self.final_gather_rays > 4096 {
+            return Err(bad("final_gather_rays", format!("{} is not in 1..=4096", self.final_gather_rays)));
+        }
+        if self.light_samples == 0 || self.light_samples > 1024 {
+            return Err(bad("light_samples", format!("{} is not in 1..=1024", self.light_samples)));
+        }
+        if self.max_bounces > 10_000 || self.max_depth > 10_000 {
+            return Err(bad("max_bounces/max_depth", "at most 10000"));
+        }
+        Ok(())
+    }
+}

@@ -15,3 +15,4 @@ pub mod light;
 pub mod material;
 pub mod scene;
 pub mod film;
+pub mod stats;

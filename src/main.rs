@@ -1,1 +1,122 @@
-fn main() {}
+//! The `photonmap` command: render, agree, info.
+
+mod cli;
+mod progress;
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use cli::{Cli, Command};
+use photonmap::accel::{AccelOptions, AnyAccel};
+use photonmap::integrator::{self, Progress};
+use photonmap::scene::Scene;
+use photonmap::stats::Stats;
+use std::process::ExitCode;
+use std::time::Instant;
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render(args),
+        Command::Agree(args) => agree(args),
+        Command::Info { scene } => info(&scene),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("photonmap: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new().start_handler(|_| photonmap::accel::init_tracing_thread());
+    if let Some(t) = threads {
+        if t == 0 || t > 4096 {
+            bail!("--threads {t}: must be in 1..=4096");
+        }
+        b = b.num_threads(t);
+    }
+    b.build().context("could not start the worker threads")
+}
+
+fn render(args: cli::RenderArgs) -> Result<()> {
+    let wall = Instant::now();
+    let mut stats = Stats::default();
+    let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| Scene::load(&args.scene))?;
+    let settings = scene.render.overridden_by(&args.settings.to_settings());
+    let width = args.width.unwrap_or(scene.camera.width);
+    let height = args.height.unwrap_or(scene.camera.height);
+    let cfg = settings.resolve(width, height).with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
+    for out in [Some(&args.output), args.png.as_ref(), args.stats.as_ref()].into_iter().flatten() {
+        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !dir.is_dir() {
+            bail!("{}: the directory {} does not exist", out.display(), dir.display());
+        }
+    }
+    let pool = pool(args.threads)?;
+    stats.threads = pool.current_num_threads();
+    stats.scene = args.scene.display().to_string();
+    let progress = progress::Bars::new(args.quiet);
+    let output = pool.install(|| -> Result<integrator::RenderOutput> {
+        let options = AccelOptions { robust: cfg.robust, ..Default::default() };
+        let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
+        let accel = stats.run("accel", reason, |_| AnyAccel::build(cfg.accel, &scene.mesh, options))?;
+        stats.accel = accel.name().to_string();
+        let progress: &dyn Progress = &progress;
+        Ok(photonmap::dispatch!(&accel, a => integrator::render(&scene, a, &cfg, progress, stats)))
+    })?;
+    let mut stats = output.stats;
+    output.film.write_exr(&args.output)?;
+    if let Some(png) = &args.png {
+        output.film.write_png(png)?;
+    }
+    stats.wall_seconds = wall.elapsed().as_secs_f64();
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats)?;
+        std::fs::write(path, json).with_context(|| format!("{}: could not write the stats", path.display()))?;
+    }
+    if !args.quiet {
+        eprintln!(
+            "photonmap: {} ({}x{}, {} spp) in {:.2} s with {} on {} threads",
+            args.output.display(),
+            cfg.width,
+            cfg.height,
+            cfg.spp,
+            stats.wall_seconds,
+            stats.accel,
+            stats.threads
+        );
+    }
+    Ok(())
+}
+
+fn agree(args: cli::AgreeArgs) -> Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    let options = AccelOptions { robust: args.robust, ..Default::default() };
+    let report = photonmap::agree::agree_scene(&scene, args.rays, args.seed, options)?;
+    if args.json {
+        println!("{}", serde_json::to_string(&report)?);
+    } else {
+        println!("{report}");
+    }
+    Ok(())
+}
+
+fn info(path: &std::path::Path) -> Result<()> {
+    let scene = Scene::load(path)?;
+    let b = scene.bounds();
+    println!("scene      {}", path.display());
+    println!("triangles  {}", scene.mesh.len());
+    println!("vertices   {}", scene.mesh.positions.len());
+    println!("bounds     {:?} .. {:?}", b.min.to_array(), b.max.to_array());
+    println!("camera     {}x{}, eye {:?}", scene.camera.width, scene.camera.height, scene.camera.eye.to_array());
+    for (name, m) in scene.material_names.iter().zip(&scene.materials) {
+        let count = scene.tri_material.iter().filter(|&&i| scene.materials[i as usize] == *m).count();
+        println!("material   {name}: {m:?} ({count} triangles)");
+    }
+    for l in &scene.lights {
+        println!("light      {l:?}");
+    }
+    Ok(())
+}

@@ -1,0 +1,155 @@
+//! Command-line interface: clap definitions, validated once into library configs.
+
+use clap::{Args, Parser, Subcommand};
+use photonmap::accel::AccelKind;
+use photonmap::config::{ColorMode, IndirectMode, Kernel, RenderSettings};
+use std::path::PathBuf;
+
+/// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
+#[derive(Parser, Debug)]
+#[command(name = "photonmap", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render a scene to OpenEXR (and optionally a PNG preview).
+    Render(RenderArgs),
+    /// Cast the same rays through Embree, the BVH (and brute force on small scenes) and report
+    /// how often they disagree.
+    Agree(AgreeArgs),
+    /// Print what a scene holds: triangles, materials, lights, bounds.
+    Info {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
+}
+
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Output image, float RGB OpenEXR.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write a tone-mapped sRGB PNG preview here.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Write a JSON report (stages, photons, rays, timings) here.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// No progress bars.
+    #[arg(short, long)]
+    pub quiet: bool,
+    /// Image width (default: the scene's camera).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height (default: the scene's camera).
+    #[arg(long)]
+    pub height: Option<u32>,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
+}
+
+/// Settings that may also be given in the scene's `[render]` table; flags win.
+#[derive(Args, Debug, Default)]
+pub struct SettingsArgs {
+    /// Ray-casting backend [default: embree when built with it, else bvh].
+    #[arg(long, value_enum)]
+    pub accel: Option<AccelKind>,
+    /// Use Embree's robust (watertight) mode [default: true].
+    #[arg(long)]
+    pub robust: Option<bool>,
+    /// Photons emitted for the indirect map [default: 300000].
+    #[arg(long)]
+    pub photons: Option<u64>,
+    /// Photons aimed at specular objects for the caustic map [default: 300000].
+    #[arg(long)]
+    pub caustic_photons: Option<u64>,
+    /// Camera samples per pixel [default: 16].
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Random seed; the same seed gives the same image for any thread count [default: 1].
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Longest photon path [default: 64].
+    #[arg(long)]
+    pub max_bounces: Option<u32>,
+    /// Longest camera path through mirrors and glass [default: 16].
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Photons per indirect radiance estimate [default: 100].
+    #[arg(long)]
+    pub gather_photons: Option<u32>,
+    /// Largest indirect gather radius, scene units [default: a tenth of the scene radius].
+    #[arg(long)]
+    pub gather_radius: Option<f32>,
+    /// Photons per caustic radiance estimate [default: 60].
+    #[arg(long)]
+    pub caustic_gather_photons: Option<u32>,
+    /// Largest caustic gather radius [default: a quarter of the indirect one].
+    #[arg(long)]
+    pub caustic_gather_radius: Option<f32>,
+    /// Indirect light from the map's estimate or by final gathering [default: estimate].
+    #[arg(long, value_enum)]
+    pub indirect: Option<IndirectMode>,
+    /// Rays per final gather [default: 32].
+    #[arg(long)]
+    pub final_gather_rays: Option<u32>,
+    /// Photons carry one colour channel (three maps, the lecture's way) or RGB [default: per-channel].
+    #[arg(long, value_enum)]
+    pub color: Option<ColorMode>,
+    /// Density-estimation kernel [default: cone].
+    #[arg(long, value_enum)]
+    pub kernel: Option<Kernel>,
+    /// Shadow-ray samples per shading point [default: 1].
+    #[arg(long)]
+    pub light_samples: Option<u32>,
+}
+
+impl SettingsArgs {
+    pub fn to_settings(&self) -> RenderSettings {
+        RenderSettings {
+            accel: self.accel,
+            photons: self.photons,
+            caustic_photons: self.caustic_photons,
+            spp: self.spp,
+            seed: self.seed,
+            max_bounces: self.max_bounces,
+            max_depth: self.max_depth,
+            gather_photons: self.gather_photons,
+            gather_radius: self.gather_radius,
+            caustic_gather_photons: self.caustic_gather_photons,
+            caustic_gather_radius: self.caustic_gather_radius,
+            indirect: self.indirect,
+            final_gather_rays: self.final_gather_rays,
+            color: self.color,
+            kernel: self.kernel,
+            light_samples: self.light_samples,
+            robust: self.robust,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+pub struct AgreeArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Rays of each kind.
+    #[arg(long, default_value_t = 100_000)]
+    pub rays: usize,
+    /// Random seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Use Embree's robust mode.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub robust: bool,
+}

@@ -1,0 +1,179 @@
+//! The camera pass: primary rays, mirrors and glass followed recursively, and at the first
+//! diffuse or glossy surface the sum the lecture prescribes: direct light by shadow rays,
+//! caustics from the caustic map, indirect light from the indirect map (radiance estimate) or
+//! by final gathering (Jensen 1996).
+
+use super::direct::direct_light;
+use super::{Counters, Shared};
+use crate::accel::Accel;
+use crate::config::IndirectMode;
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::material::{face_forward, Material};
+use crate::photon::map::PhotonMaps;
+use crate::photon::kdtree::Neighbor;
+use glam::Vec3;
+use rand::Rng;
+use rand_pcg::Pcg32;
+
+/// Per-thread scratch buffers reused across pixels.
+#[derive(Default)]
+pub struct Scratch {
+    pub neighbors: Vec<Neighbor>,
+}
+
+/// A surface point reached by a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Unit geometric normal (front side as wound).
+    pub n: Vec3,
+    pub prim: u32,
+    pub t: f32,
+}
+
+impl<A: Accel> Shared<'_, A> {
+    /// Closest surface along `ray`, with a usable normal (degenerate triangles are skipped as
+    /// misses, which they are for every backend).
+    #[inline]
+    pub fn trace(&self, ray: &Ray) -> Option<SurfaceHit> {
+        let hit = self.accel.intersect(ray)?;
+        let n = self.scene.mesh.normal(hit.prim)?;
+        let p = self.scene.mesh.point(hit.prim, hit.u, hit.v);
+        Some(SurfaceHit { p, n, prim: hit.prim, t: hit.t })
+    }
+
+    /// Mean radiance of the samples of pixel `(px, py)`.
+    pub fn pixel(&self, px: u32, py: u32, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
+        let spp = self.cfg.spp;
+        // Stratified jitter over a near-square grid of strata, the remainder uniformly random.
+        let side = (spp as f32).sqrt() as u32;
+        let mut sum = Vec3::ZERO;
+        let mut good = 0u32;
+        for s in 0..spp {
+            let (jx, jy) = if s < side * side {
+                ((s % side) as f32 + rng.gen::<f32>(), (s / side) as f32 + rng.gen::<f32>())
+            } else {
+                (rng.gen::<f32>() * side as f32, rng.gen::<f32>() * side as f32)
+            };
+            let fx = px as f32 + jx / side as f32;
+            let fy = py as f32 + jy / side as f32;
+            let l = self.radiance(self.scene_camera.ray(fx, fy), rng, scratch, c);
+            if l.is_finite() {
+                sum += l;
+                good += 1;
+            } else {
+                c.nonfinite += 1;
+            }
+        }
+        if good == 0 {
+            Vec3::ZERO
+        } else {
+            sum / good as f32
+        }
+    }
+
+    /// Radiance arriving along a camera ray.
+    pub fn radiance(&self, mut ray: Ray, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
+        let mut beta = Vec3::ONE;
+        let mut l = Vec3::ZERO;
+        for depth in 0..=self.cfg.max_depth {
+            if depth == 0 {
+                c.rays.camera += 1;
+            } else {
+                c.rays.specular += 1;
+            }
+            let Some(hit) = self.trace(&ray) else { break };
+            let m = self.scene.material(hit.prim);
+            let wo = -ray.dir.normalize();
+            // Emission seen directly or through mirrors and glass (direct light at diffuse
+            // surfaces comes from shadow rays instead).
+            l += beta * m.emitted(hit.n, wo);
+            if m.is_specular() {
+                if depth == self.cfg.max_depth {
+                    break;
+                }
+                let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { break };
+                beta *= s.weight(hit.n);
+                if beta.max_element() <= 0.0 {
+                    break;
+                }
+                ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, s.wi)), s.wi);
+                continue;
+            }
+            l += beta * self.shade(&hit, wo, m, rng, scratch, c);
+            break;
+        }
+        l
+    }
+
+    /// Reflected radiance toward `wo` at a diffuse or glossy surface.
+    fn shade(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let mut l = direct_light(self, hit, wo, m, self.cfg.light_samples, rng, c);
+        if !self.maps.caustic.is_empty() {
+            c.queries += self.maps.caustic.len() as u64;
+            l += PhotonMaps::radiance(&self.maps.caustic, hit.p, hit.n, wo, m, &self.caustic_gather, &mut scratch.neighbors);
+        }
+        if !self.maps.indirect.is_empty() {
+            l += match self.cfg.indirect {
+                IndirectMode::Estimate => {
+                    c.queries += self.maps.indirect.len() as u64;
+                    PhotonMaps::radiance(&self.maps.indirect, hit.p, hit.n, wo, m, &self.gather, &mut scratch.neighbors)
+                }
+                IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
+            };
+        }
+        l
+    }
+
+    /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
+    /// diffuse or glossy surface (after any mirrors and glass), the radiance leaving it toward
+    /// the gather point is read from the maps, plus its direct light by one shadow ray. Emission
+    /// is not counted there: it is direct light at the gather point, already sampled.
+    fn final_gather(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let n_rays = self.cfg.final_gather_rays;
+        let mut sum = Vec3::ZERO;
+        for _ in 0..n_rays {
+            let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
+            let mut beta = s.weight(hit.n);
+            let mut ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, s.wi)), s.wi);
+            for depth in 0..=self.cfg.max_depth {
+                c.rays.gather += 1;
+                let Some(y) = self.trace(&ray) else { break };
+                let my = self.scene.material(y.prim);
+                let wy = -ray.dir;
+                if my.is_specular() {
+                    if depth == self.cfg.max_depth {
+                        break;
+                    }
+                    let Some(s) = my.sample(y.n, wy, rng.gen(), [rng.gen(), rng.gen()]) else { break };
+                    beta *= s.weight(y.n);
+                    ray = Ray::new(offset_ray_origin(y.p, face_forward(y.n, s.wi)), s.wi);
+                    continue;
+                }
+                let mut ly = direct_light(self, &y, wy, my, 1, rng, c);
+                c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
+                ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &self.caustic_gather, &mut scratch.neighbors);
+                ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &self.gather, &mut scratch.neighbors);
+                sum += beta * ly;
+                break;
+            }
+        }
+        sum / n_rays as f32
+    }
+}

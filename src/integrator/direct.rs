@@ -1,0 +1,73 @@
+//! Direct light by shadow rays: lights chosen by power, `n` samples per shading point; for
+//! glossy surfaces one BSDF sample as well, combined with the light samples by multiple
+//! importance sampling (Veach 1997, power heuristic).
+
+use super::camera::SurfaceHit;
+use super::{Counters, Shared};
+use crate::accel::Accel;
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::material::{face_forward, Material};
+use crate::sampling::power_heuristic;
+use glam::Vec3;
+use rand::Rng;
+use rand_pcg::Pcg32;
+
+/// Shadow rays stop this fraction short of the light sample, so they never hit the emitter
+/// itself.
+pub const SHADOW_MARGIN: f32 = 1e-4;
+
+/// Whether the segment from the surface at `hit` toward `wi` over `dist` is unblocked.
+#[inline]
+pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, wi: Vec3, dist: f32, c: &mut Counters) -> bool {
+    c.rays.shadow += 1;
+    let origin = offset_ray_origin(hit.p, face_forward(hit.n, wi));
+    let t_max = if dist.is_finite() { dist * (1.0 - SHADOW_MARGIN) } else { f32::INFINITY };
+    !s.accel.occluded(&Ray::segment(origin, wi, 0.0, t_max))
+}
+
+/// Direct radiance reflected toward `wo` at `hit`, averaged over `n` light samples (plus, for
+/// glossy surfaces, BSDF samples weighted by MIS).
+pub fn direct_light<A: Accel>(
+    s: &Shared<'_, A>,
+    hit: &SurfaceHit,
+    wo: Vec3,
+    m: &Material,
+    n: u32,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> Vec3 {
+    if s.lights.is_empty() {
+        return Vec3::ZERO;
+    }
+    let glossy = matches!(m, Material::Glossy { .. });
+    let mut sum = Vec3::ZERO;
+    for _ in 0..n {
+        // Light sampling.
+        if let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) {
+            let f = m.eval(hit.n, wo, ls.wi);
+            if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, ls.wi, ls.dist, c) {
+                let cos = hit.n.dot(ls.wi).abs();
+                let w = if glossy && !ls.delta { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) } else { 1.0 };
+                sum += f * ls.li * (cos * w / ls.pdf);
+            }
+        }
+        // BSDF sampling toward area lights, for glossy lobes that light sampling covers badly.
+        if glossy {
+            let Some(bs) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
+            if bs.delta || bs.pdf <= 0.0 {
+                continue;
+            }
+            c.rays.shadow += 1;
+            let ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, bs.wi)), bs.wi);
+            let Some(y) = s.trace(&ray) else { continue };
+            let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
+            if le == Vec3::ZERO {
+                continue;
+            }
+            let light_pdf = s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n);
+            let w = power_heuristic(1.0, bs.pdf, 1.0, light_pdf);
+            sum += bs.weight(hit.n) * le * w;
+        }
+    }
+    sum / n as f32
+}

@@ -1,0 +1,104 @@
+//! The scene's lights as the integrator sees them: one distribution to pick a light for a
+//! shadow ray (by power), and a flat list of photon emitters where every emissive triangle is an
+//! emitter of its own (so the photon pass can stratify over each).
+
+use crate::light::{build_lights, power_distribution, Light, LightSample};
+use crate::sampling::Distribution1D;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// A photon source: a light, or one triangle of the area lights.
+#[derive(Clone, Copy, Debug)]
+pub struct Emitter {
+    pub light: usize,
+    /// Index into the area light's triangles.
+    pub triangle: Option<usize>,
+    /// Emitted flux per channel (W).
+    pub power: Vec3,
+}
+
+/// Where a photon starts and where it goes.
+#[derive(Clone, Copy, Debug)]
+pub struct Emission {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+/// All lights of a scene, ready for sampling.
+pub struct LightSet {
+    lights: Vec<Light>,
+    select: Distribution1D,
+    emitters: Vec<Emitter>,
+    area: Option<usize>,
+}
+
+impl LightSet {
+    pub fn new(scene: &Scene) -> Self {
+        let lights = build_lights(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials);
+        let select = power_distribution(&lights);
+        let mut emitters = Vec::new();
+        let mut area = None;
+        for (i, l) in lights.iter().enumerate() {
+            match l {
+                Light::Area(a) => {
+                    area = Some(i);
+                    emitters.extend(a.triangles().iter().enumerate().map(|(t, tri)| Emitter {
+                        light: i,
+                        triangle: Some(t),
+                        power: tri.power(),
+                    }));
+                }
+                _ => emitters.push(Emitter { light: i, triangle: None, power: l.power() }),
+            }
+        }
+        emitters.retain(|e| e.power.max_element() > 0.0 && e.power.is_finite());
+        LightSet { lights, select, emitters, area }
+    }
+
+    /// Whether there is nothing to sample.
+    pub fn is_empty(&self) -> bool {
+        self.select.total() <= 0.0
+    }
+
+    pub fn lights(&self) -> &[Light] {
+        &self.lights
+    }
+
+    /// Emitters with non-zero power.
+    pub fn emitters(&self) -> &[Emitter] {
+        &self.emitters
+    }
+
+    /// Total flux per channel.
+    pub fn total_power(&self) -> Vec3 {
+        self.emitters.iter().map(|e| e.power).sum()
+    }
+
+    /// Incident light at `p`: a light picked by power with `u_sel`, then sampled with `u`; the
+    /// pdf includes the pick.
+    #[inline]
+    pub fn sample_li(&self, p: Vec3, u_sel: f32, u: [f32; 2]) -> Option<LightSample> {
+        let (i, pmf, _) = self.select.sample(u_sel)?;
+        let mut ls = self.lights[i].sample_li(p, u)?;
+        ls.pdf *= pmf;
+        (ls.pdf > 0.0 && ls.li.is_finite()).then_some(ls)
+    }
+
+    /// Density with which [`LightSet::sample_li`] from `p` picks the point `y` on emissive
+    /// triangle `prim` (solid angle, pick included); zero if `prim` does not emit toward `p`.
+    pub fn pdf_li_hit(&self, p: Vec3, prim: u32, y: Vec3, _ny: Vec3) -> f32 {
+        let Some(a) = self.area else { return 0.0 };
+        let wi = (y - p).normalize_or_zero();
+        self.select.pmf(a) * self.lights[a].pdf_li(p, wi, prim, y)
+    }
+
+    /// A photon leaving emitter `e`: `u_pos` places it (stratified by the caller), `u_dir` aims it.
+    #[inline]
+    pub fn sample_emission(&self, e: &Emitter, u_pos: [f32; 2], u_dir: [f32; 2]) -> Option<Emission> {
+        let s = match (e.triangle, &self.lights[e.light]) {
+            (Some(t), Light::Area(a)) => a.sample_emission_on_triangle(t, u_pos, u_dir)?,
+            (_, l) => l.sample_emission(u_pos, u_dir)?,
+        };
+        (s.dir.is_finite() && s.ray_origin.is_finite()).then_some(Emission { origin: s.ray_origin, dir: s.dir })
+    }
+}

@@ -1,0 +1,283 @@
+//! Rendering: the scene analysis that decides which stages run, the photon passes, and the
+//! camera pass. [`render`] is generic over the accelerator so its inner loops are
+//! monomorphised per backend.
+
+pub mod camera;
+pub mod direct;
+pub mod lights;
+
+use crate::accel::Accel;
+use crate::config::{ColorMode, RenderConfig};
+use crate::film::Film;
+use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
+use crate::photon::trace::{self, Pass};
+use crate::scene::{Camera, Scene};
+use crate::stats::{MapStats, RayCounts, Stats};
+use camera::Scratch;
+use glam::Vec3;
+use lights::LightSet;
+use rand::SeedableRng;
+use rand_pcg::Pcg32;
+use rayon::prelude::*;
+
+/// Everything the camera pass reads, shared by all threads.
+pub struct Shared<'a, A: Accel> {
+    pub scene: &'a Scene,
+    pub scene_camera: Camera,
+    pub accel: &'a A,
+    pub lights: &'a LightSet,
+    pub maps: &'a PhotonMaps,
+    pub cfg: &'a RenderConfig,
+    pub gather: GatherParams,
+    pub caustic_gather: GatherParams,
+}
+
+/// Per-thread counters, summed at the end (no atomics in hot loops).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Counters {
+    pub rays: RayCounts,
+    pub queries: u64,
+    pub nonfinite: u64,
+}
+
+impl std::ops::AddAssign for Counters {
+    fn add_assign(&mut self, o: Counters) {
+        self.rays += o.rays;
+        self.queries += o.queries;
+        self.nonfinite += o.nonfinite;
+    }
+}
+
+/// Reports progress of long stages (a no-op implementation is fine).
+pub trait Progress: Sync {
+    /// A stage of `total` units begins.
+    fn start(&self, _stage: &str, _total: u64) {}
+    /// `n` more units are done.
+    fn advance(&self, _n: u64) {}
+    /// The stage is over.
+    fn finish(&self) {}
+}
+
+/// Progress that reports nothing.
+pub struct Quiet;
+impl Progress for Quiet {}
+
+/// What the scene needs, decided before any work: each flag comes with the reason printed in
+/// the stats.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    pub has_specular: bool,
+    pub has_diffuse: bool,
+    pub light_power: Vec3,
+}
+
+impl Analysis {
+    pub fn of(scene: &Scene, lights: &LightSet) -> Self {
+        let used = |f: &dyn Fn(&crate::material::Material) -> bool| {
+            let mut seen = vec![false; scene.materials.len()];
+            for &m in &scene.tri_material {
+                seen[m as usize] = true;
+            }
+            scene.materials.iter().zip(&seen).any(|(m, &s)| s && f(m))
+        };
+        Analysis {
+            has_specular: used(&|m| m.is_specular()),
+            has_diffuse: used(&|m| m.is_diffuse_like()),
+            light_power: lights.total_power(),
+        }
+    }
+}
+
+/// The image and the report of a render.
+pub struct RenderOutput {
+    pub film: Film,
+    pub stats: Stats,
+}
+
+/// Renders `scene` with `accel` as `cfg` says. `stats` arrives with the stages already run
+/// (loading, acceleration build) and is completed here.
+pub fn render<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, progress: &dyn Progress, mut stats: Stats) -> RenderOutput {
+    let start = std::time::Instant::now();
+    let lights = stats.run("lights", "prepare emitters and light sampling", |_| LightSet::new(scene));
+    let analysis = Analysis::of(scene, &lights);
+    let (_, radius) = scene.bounds().bounding_sphere();
+    let lit = analysis.light_power.max_element() > 0.0;
+    let mut maps = PhotonMaps::default();
+
+    // Indirect map.
+    let why_not_indirect = if !lit {
+        Some("no light has power")
+    } else if !analysis.has_diffuse {
+        Some("nothing diffuse or glossy: no surface stores photons")
+    } else if cfg.photons == 0 {
+        Some("photon budget is 0")
+    } else {
+        None
+    };
+    match why_not_indirect {
+        Some(why) => stats.skip("photons.indirect", why),
+        None => {
+            progress.start("indirect photons", cfg.photons);
+            let out = stats.run("photons.indirect", "diffuse surfaces and lit scene", |_| {
+                let spec = trace::PassSpec {
+                    pass: Pass::Indirect,
+                    n: cfg.photons,
+                    color: cfg.color,
+                    max_bounces: cfg.max_bounces,
+                    targets: &[],
+                    seed: cfg.seed,
+                };
+                trace::trace_pass(scene, accel, &lights, &spec, progress)
+            });
+            progress.finish();
+            stats.rays.photon += out.rays;
+            maps.indirect = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
+            record_maps(&mut stats, "indirect", &maps.indirect);
+        }
+    }
+
+    // Caustic map.
+    let targets = if analysis.has_specular { trace::specular_targets(scene) } else { Vec::new() };
+    let why_not_caustic = if !analysis.has_specular {
+        Some("no specular (mirror or glass) material".to_string())
+    } else if !analysis.has_diffuse {
+        Some("nothing diffuse or glossy to receive caustics".to_string())
+    } else if !lit {
+        Some("no light has power".to_string())
+    } else if cfg.caustic_photons == 0 {
+        Some("caustic photon budget is 0".to_string())
+    } else {
+        None
+    };
+    match why_not_caustic {
+        Some(why) => stats.skip("photons.caustic", why),
+        None => {
+            let acceptance = trace::target_acceptance(&lights, &targets, 1 << 16, cfg.seed);
+            if acceptance <= 0.0 {
+                stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
+            } else {
+                // Tries such that about `caustic_photons` photons are aimed at the targets.
+                let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64).min(cfg.caustic_photons.saturating_mul(1000));
+                let reason = format!("{} specular targets, {:.2}% of emission aimed at them", targets.len(), 100.0 * acceptance);
+                progress.start("caustic photons", tries);
+                let out = stats.run("photons.caustic", reason, |_| {
+                    let spec = trace::PassSpec {
+                        pass: Pass::Caustic,
+                        n: tries,
+                        color: cfg.color,
+                        max_bounces: cfg.max_bounces,
+                        targets: &targets,
+                        seed: cfg.seed ^ 0x5EED,
+                    };
+                    trace::trace_pass(scene, accel, &lights, &spec, progress)
+                });
+                progress.finish();
+                stats.rays.photon += out.rays;
+                maps.caustic = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
+                record_maps(&mut stats, "caustic", &maps.caustic);
+            }
+        }
+    }
+    let photon_seconds = stats.seconds("photons.indirect") + stats.seconds("photons.caustic");
+    if photon_seconds > 0.0 {
+        let paths: u64 = stats.photons.values().map(|m| m.emitted).sum();
+        stats.photons_traced_per_second = paths as f64 / photon_seconds;
+    }
+
+    // Camera pass.
+    let auto_radius = 0.1 * radius;
+    let gather = GatherParams {
+        k: cfg.gather_photons as usize,
+        max_radius: cfg.gather_radius.unwrap_or(auto_radius),
+        kernel: cfg.kernel,
+        flatten: 8.0,
+    };
+    let caustic_gather = GatherParams {
+        k: cfg.caustic_gather_photons as usize,
+        max_radius: cfg.caustic_gather_radius.unwrap_or(0.25 * auto_radius),
+        kernel: cfg.kernel,
+        flatten: 8.0,
+    };
+    let shared = Shared {
+        scene,
+        scene_camera: scene.camera.with_resolution(cfg.width, cfg.height),
+        accel,
+        lights: &lights,
+        maps: &maps,
+        cfg,
+        gather,
+        caustic_gather,
+    };
+    progress.start("camera", cfg.height as u64);
+    let (film, counters) = stats.run("camera", "always", |_| camera_pass(&shared, progress));
+    progress.finish();
+    stats.rays += counters.rays;
+    stats.gather_queries = counters.queries;
+    stats.nonfinite_samples = counters.nonfinite;
+    stats.width = cfg.width;
+    stats.height = cfg.height;
+    stats.wall_seconds += start.elapsed().as_secs_f64();
+    let traced_seconds: f64 = stats.seconds("camera") + photon_seconds;
+    if traced_seconds > 0.0 {
+        stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
+    }
+    RenderOutput { film, stats }
+}
+
+/// Packs and balances the maps of one pass.
+fn build_maps(out: trace::PassOutput, color: ColorMode) -> Vec<PhotonMap> {
+    out.maps
+        .into_iter()
+        .zip(out.emitted)
+        .enumerate()
+        .map(|(i, (hits, emitted))| {
+            let c = match color {
+                ColorMode::Rgb => MapColor::Rgb,
+                ColorMode::PerChannel => MapColor::Channel(i),
+            };
+            PhotonMap::build(hits, c, emitted)
+        })
+        .collect()
+}
+
+fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
+    let names = ["r", "g", "b"];
+    for (i, m) in maps.iter().enumerate() {
+        let name = if maps.len() == 1 { kind.to_string() } else { format!("{kind}.{}", names[i]) };
+        stats.photons.insert(name, MapStats { emitted: m.emitted, stored: m.len() as u64, bytes: m.bytes() as u64 });
+    }
+}
+
+/// Renders every pixel; rows in parallel, each pixel with its own generator seeded from
+/// (seed, pixel), so the image does not depend on the thread count.
+fn camera_pass<A: Accel>(s: &Shared<'_, A>, progress: &dyn Progress) -> (Film, Counters) {
+    let (w, h) = (s.cfg.width as usize, s.cfg.height as usize);
+    let rows: Vec<(Vec<Vec3>, Counters)> = (0..h)
+        .into_par_iter()
+        .map_init(
+            || {
+                crate::accel::init_tracing_thread();
+                Scratch::default()
+            },
+            |scratch, y| {
+                let mut c = Counters::default();
+                let row = (0..w)
+                    .map(|x| {
+                        let pixel = (y * w + x) as u64;
+                        let mut rng = Pcg32::seed_from_u64(trace::mix(s.cfg.seed, 0xCA3E7A, pixel));
+                        s.pixel(x as u32, y as u32, &mut rng, scratch, &mut c)
+                    })
+                    .collect();
+                progress.advance(1);
+                (row, c)
+            },
+        )
+        .collect();
+    let mut film = Film::new(w, h);
+    let mut total = Counters::default();
+    for (y, (row, c)) in rows.into_iter().enumerate() {
+        film.pixels[y * w..(y + 1) * w].copy_from_slice(&row);
+        total += c;
+    }
+    (film, total)
+}

@@ -1,0 +1,356 @@
+//! The photon pass (Jensen 2001, ch. 5; the lecture's slides on emission, storage, absorption
+//! and bouncing).
+//!
+//! * The budget is split among emitters in proportion to their power, and every photon of a map
+//!   carries the same power: brighter lights emit more photons, not stronger ones. Counts are
+//!   rounded stochastically so the split stays unbiased.
+//! * Emissive triangles are emitters of their own, each covered by a stratified grid (one photon
+//!   per cell, at a random position inside it) with cosine-distributed directions.
+//! * At each diffuse or glossy hit a copy of the photon is stored and the original goes on; the
+//!   first hit straight from the light is never stored (direct light comes from shadow rays).
+//! * Russian roulette on the surface's reflectances decides absorption, a diffuse bounce or a
+//!   specular bounce; survivors keep their power (equal-power photons).
+//! * The caustic map holds light → specular+ → diffuse paths. Caustic photons are aimed: an
+//!   emission sample is kept only if its ray meets the bounding sphere of a specular object
+//!   (a projection map made of spheres); rejected tries still count as emitted, so every photon
+//!   keeps the power `flux / tries` and the estimate stays exact.
+//! * The indirect map holds photons with at least one diffuse bounce behind them.
+//!
+//! Work is split into fixed chunks, each with its own generator seeded from (seed, pass, chunk),
+//! so the maps are identical for any number of threads.
+
+use super::map::PhotonHit;
+use crate::accel::Accel;
+use crate::config::ColorMode;
+use crate::geometry::{offset_ray_origin, Ray};
+use crate::integrator::lights::{Emitter, LightSet};
+use crate::integrator::Progress;
+use crate::material::{face_forward, LobeKind};
+use crate::scene::Scene;
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg32;
+use rayon::prelude::*;
+
+/// Photons per work chunk (and per generator).
+const CHUNK: u64 = 4096;
+
+/// Which map a pass fills.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// Light → specular+ → diffuse paths, photons aimed at specular objects.
+    Caustic,
+    /// Paths with at least one diffuse bounce.
+    Indirect,
+}
+
+/// What a pass produced: photons per map (one map in RGB mode, three per channel), how many
+/// paths were emitted for each, and the rays traced.
+#[derive(Debug, Default)]
+pub struct PassOutput {
+    pub maps: Vec<Vec<PhotonHit>>,
+    pub emitted: Vec<u64>,
+    pub rays: u64,
+    pub paths: u64,
+}
+
+/// A bounding sphere of a group of specular triangles, target of caustic photons.
+#[derive(Clone, Copy, Debug)]
+pub struct Target {
+    pub center: Vec3,
+    pub radius: f32,
+}
+
+impl Target {
+    /// Whether the ray `o + t d` (`t > 0`) meets the sphere.
+    #[inline]
+    fn hit_by(&self, o: Vec3, d: Vec3) -> bool {
+        let oc = self.center - o;
+        let r2 = self.radius * self.radius;
+        let dd = d.length_squared();
+        let tca = oc.dot(d);
+        let d2 = oc.length_squared() - tca * tca / dd;
+        // Inside the sphere, or ahead of the ray and close enough to its axis.
+        oc.length_squared() <= r2 || (tca > 0.0 && d2 <= r2)
+    }
+}
+
+/// Bounding spheres of the connected groups of specular triangles (triangles sharing a vertex
+/// are connected). Many small groups are merged per material so the list stays short.
+pub fn specular_targets(scene: &Scene) -> Vec<Target> {
+    let mesh = &scene.mesh;
+    let mut parent: Vec<u32> = (0..mesh.positions.len() as u32).collect();
+    fn find(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let specular: Vec<u32> = (0..mesh.len() as u32).filter(|&t| scene.material(t).is_specular()).collect();
+    for &t in &specular {
+        let [a, b, c] = mesh.indices[t as usize];
+        let (ra, rb, rc) = (find(&mut parent, a), find(&mut parent, b), find(&mut parent, c));
+        parent[rb as usize] = ra;
+        parent[rc as usize] = ra;
+    }
+    let mut groups: std::collections::BTreeMap<u32, crate::geometry::Aabb> = Default::default();
+    for &t in &specular {
+        let root = find(&mut parent, mesh.indices[t as usize][0]);
+        let b = groups.entry(root).or_default();
+        for p in mesh.triangle(t) {
+            *b = b.grow(p);
+        }
+    }
+    const MAX_TARGETS: usize = 256;
+    if groups.len() > MAX_TARGETS {
+        // One sphere per specular material instead.
+        let mut per_material: std::collections::BTreeMap<u32, crate::geometry::Aabb> = Default::default();
+        for &t in &specular {
+            let b = per_material.entry(scene.tri_material[t as usize]).or_default();
+            for p in mesh.triangle(t) {
+                *b = b.grow(p);
+            }
+        }
+        groups = per_material;
+    }
+    groups
+        .values()
+        .map(|b| {
+            let (center, radius) = b.bounding_sphere();
+            // A little slack so rays grazing the silhouette are kept.
+            Target { center, radius: radius * 1.001 + 1e-6 * center.abs().max_element() }
+        })
+        .collect()
+}
+
+/// One emitter's share of a pass: how many photons (or tries) and their power.
+#[derive(Clone, Copy, Debug)]
+struct Job {
+    emitter: usize,
+    map: usize,
+    channel: Option<usize>,
+    count: u64,
+    power: Vec3,
+}
+
+/// Splits `n` photons among emitters by power, per map. Returns the jobs and the photons
+/// allotted to each map.
+fn allocate(emitters: &[Emitter], n: u64, color: ColorMode, rng: &mut Pcg32) -> (Vec<Job>, Vec<u64>) {
+    let mut jobs = Vec::new();
+    let channels: Vec<Option<usize>> = match color {
+        ColorMode::PerChannel => vec![Some(0), Some(1), Some(2)],
+        ColorMode::Rgb => vec![None],
+    };
+    let mut emitted = vec![0u64; channels.len()];
+    for (map, &channel) in channels.iter().enumerate() {
+        let n_map = n / channels.len() as u64 + u64::from((map as u64) < n % channels.len() as u64);
+        let weight = |e: &Emitter| match channel {
+            Some(c) => e.power[c],
+            None => e.power.x + e.power.y + e.power.z,
+        };
+        let total: f64 = emitters.iter().map(|e| weight(e) as f64).sum();
+        if !(total > 0.0) || n_map == 0 {
+            continue;
+        }
+        for (i, e) in emitters.iter().enumerate() {
+            let w = weight(e) as f64;
+            if !(w > 0.0) {
+                continue;
+            }
+            let expected = n_map as f64 * w / total;
+            let count = expected.floor() as u64 + u64::from(rng.gen::<f64>() < expected.fract());
+            if count == 0 {
+                continue;
+            }
+            // Equal power: this map's flux over its expected photon count, in the photon's
+            // channel (or, for RGB photons, the emitter's colour scaled to equal weight).
+            let power = match channel {
+                Some(c) => {
+                    let mut p = Vec3::ZERO;
+                    p[c] = (total / n_map as f64) as f32;
+                    p
+                }
+                None => e.power * ((total / n_map as f64) / w) as f32,
+            };
+            emitted[map] += count;
+            jobs.push(Job { emitter: i, map, channel, count, power });
+        }
+    }
+    (jobs, emitted)
+}
+
+/// What one pass does.
+#[derive(Clone, Copy, Debug)]
+pub struct PassSpec<'a> {
+    pub pass: Pass,
+    /// Photons (indirect pass) or emission tries (caustic pass).
+    pub n: u64,
+    pub color: ColorMode,
+    pub max_bounces: u32,
+    /// Bounding spheres caustic photons are aimed at.
+    pub targets: &'a [Target],
+    pub seed: u64,
+}
+
+/// Traces one pass; `progress` advances by the photons of each finished chunk.
+pub fn trace_pass<A: Accel>(
+    scene: &Scene,
+    accel: &A,
+    lights: &LightSet,
+    spec: &PassSpec<'_>,
+    progress: &dyn Progress,
+) -> PassOutput {
+    let PassSpec { pass, n, color, max_bounces, targets, seed } = *spec;
+    let emitters = lights.emitters();
+    let mut alloc_rng = Pcg32::seed_from_u64(mix(seed, pass as u64, u64::MAX));
+    let (jobs, emitted) = allocate(emitters, n, color, &mut alloc_rng);
+    // Fixed chunks over the concatenated jobs.
+    let mut chunks: Vec<(usize, u64, u64)> = Vec::new();
+    for (j, job) in jobs.iter().enumerate() {
+        let mut start = 0;
+        while start < job.count {
+            let end = (start + CHUNK).min(job.count);
+            chunks.push((j, start, end));
+            start = end;
+        }
+    }
+    let n_maps = emitted.len();
+    let results: Vec<(Vec<Vec<PhotonHit>>, u64, u64)> = chunks
+        .par_iter()
+        .enumerate()
+        .map(|(ci, &(j, start, end))| {
+            let job = &jobs[j];
+            let mut rng = Pcg32::seed_from_u64(mix(seed, pass as u64, ci as u64));
+            let mut out = vec![Vec::new(); n_maps];
+            let (mut rays, mut paths) = (0u64, 0u64);
+            let e = &emitters[job.emitter];
+            for i in start..end {
+                let u_pos = stratum(i, job.count, &mut rng);
+                let Some(em) = lights.sample_emission(e, u_pos, [rng.gen(), rng.gen()]) else { continue };
+                if pass == Pass::Caustic && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
+                    continue;
+                }
+                paths += 1;
+                rays += trace_photon(scene, accel, pass, em.origin, em.dir, job, max_bounces, &mut rng, &mut out[job.map]);
+            }
+            progress.advance(end - start);
+            (out, rays, paths)
+        })
+        .collect();
+    let mut output = PassOutput { maps: vec![Vec::new(); n_maps], emitted, rays: 0, paths: 0 };
+    for (maps, rays, paths) in results {
+        for (dst, src) in output.maps.iter_mut().zip(maps) {
+            dst.extend(src);
+        }
+        output.rays += rays;
+        output.paths += paths;
+    }
+    output
+}
+
+/// Follows one photon, storing copies at diffuse hits as `pass` requires. Returns rays cast.
+#[allow(clippy::too_many_arguments)]
+fn trace_photon<A: Accel>(
+    scene: &Scene,
+    accel: &A,
+    pass: Pass,
+    origin: Vec3,
+    dir: Vec3,
+    job: &Job,
+    max_bounces: u32,
+    rng: &mut Pcg32,
+    out: &mut Vec<PhotonHit>,
+) -> u64 {
+    let mut ray = Ray::new(origin, dir);
+    let mut power = job.power;
+    let mut specular_only = true;
+    let mut rays = 0;
+    for bounce in 0..=max_bounces {
+        rays += 1;
+        let Some(hit) = accel.intersect(&ray) else { break };
+        let Some(n) = scene.mesh.normal(hit.prim) else { break };
+        let p = scene.mesh.point(hit.prim, hit.u, hit.v);
+        let m = scene.material(hit.prim);
+        let wo = -ray.dir.normalize();
+        if m.is_diffuse_like() {
+            match pass {
+                Pass::Caustic => {
+                    if bounce > 0 && specular_only {
+                        out.push(PhotonHit { pos: p, wi: wo, power });
+                    }
+                    break;
+                }
+                Pass::Indirect => {
+                    if !specular_only {
+                        out.push(PhotonHit { pos: p, wi: wo, power });
+                    }
+                }
+            }
+        }
+        if bounce == max_bounces {
+            break;
+        }
+        let Some(s) = m.scatter_photon(n, wo, power, job.channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()]) else {
+            break;
+        };
+        if matches!(s.kind, LobeKind::Diffuse | LobeKind::Glossy) {
+            specular_only = false;
+        }
+        power = s.power;
+        ray = Ray::new(offset_ray_origin(p, face_forward(n, s.wi)), s.wi);
+    }
+    rays
+}
+
+/// Position sample `i` of `n` on an emitter: jittered cells of an `m × m` grid (`m² <= n`),
+/// the remainder uniformly random.
+#[inline]
+fn stratum(i: u64, n: u64, rng: &mut Pcg32) -> [f32; 2] {
+    let m = (n as f64).sqrt() as u64;
+    if i < m * m {
+        let (cx, cy) = (i % m, i / m);
+        [(cx as f32 + rng.gen::<f32>()) / m as f32, (cy as f32 + rng.gen::<f32>()) / m as f32]
+    } else {
+        [rng.gen(), rng.gen()]
+    }
+    .map(|u: f32| u.min(1.0 - f32::EPSILON / 2.0))
+}
+
+/// A well-mixed 64-bit seed from three values (SplitMix64 finaliser).
+pub fn mix(a: u64, b: u64, c: u64) -> u64 {
+    let mut z = a ^ b.rotate_left(21) ^ c.rotate_left(42) ^ 0x9E37_79B9_7F4A_7C15;
+    for _ in 0..2 {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    z
+}
+
+/// Fraction of emission samples that meet a specular target, estimated from `tries` samples
+/// split among emitters by power (the same split as the pass). Used to turn a caustic photon
+/// budget into a number of tries.
+pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed: u64) -> f64 {
+    if targets.is_empty() {
+        return 0.0;
+    }
+    let emitters = lights.emitters();
+    let mut rng = Pcg32::seed_from_u64(mix(seed, 7, 7));
+    let (jobs, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
+    let (mut accepted, mut total) = (0u64, 0u64);
+    for job in &jobs {
+        for i in 0..job.count {
+            total += 1;
+            let u_pos = stratum(i, job.count, &mut rng);
+            if let Some(em) = lights.sample_emission(&emitters[job.emitter], u_pos, [rng.gen(), rng.gen()]) {
+                accepted += u64::from(targets.iter().any(|t| t.hit_by(em.origin, em.dir)));
+            }
+        }
+    }
+    if total == 0 {
+        0.0
+    } else {
+        accepted as f64 / total as f64
+    }
+}
