@@ -1,0 +1,2 @@
+//! Photon maps (placeholder).
+pub mod kdtree;
