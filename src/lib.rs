@@ -10,9 +10,12 @@
 
 pub mod accel;
 pub mod config;
+pub mod film;
 pub mod geometry;
+pub mod integrator;
 pub mod light;
 pub mod material;
+pub mod photon;
+pub mod sampling;
 pub mod scene;
-pub mod film;
 pub mod stats;

@@ -1,0 +1,293 @@
+//! k-nearest-neighbour and fixed-radius queries on [`KdTree`].
+
+use glam::Vec3;
+
+use super::{KdPoint, KdTree, Neighbor, CODE_DEGENERATE, LEAF_SIZE};
+
+/// Capacity of the traversal stack. Each internal level pushes at most one frame and a tree of
+/// `u32::MAX` items has fewer than 32 internal levels.
+const STACK_SIZE: usize = 64;
+
+/// A deferred far subtree: the slice `lo..hi`, its heap number and the squared distance from the
+/// query to its splitting plane (a lower bound on the metric for every item in it).
+#[derive(Clone, Copy, Default)]
+struct Frame {
+    lo: u32,
+    hi: u32,
+    id: u32,
+    d2: f32,
+}
+
+/// The photon-gather metric: `|d|² + (stretch - 1) (n·d)²` for the offset `d`, with the unit
+/// surface normal `normal`. With `stretch ≥ 1` it is never below the squared Euclidean distance,
+/// so it is valid for [`KdTree::knn_with`]; the search region `metric ≤ r²` is an ellipsoid
+/// squashed by `1/√stretch` along the normal (a disc-like region in the surface).
+///
+/// # Panics
+/// In debug builds, if `stretch < 1`.
+#[inline]
+pub fn flattened_metric(normal: Vec3, stretch: f32) -> impl Fn(Vec3) -> f32 + Copy {
+    debug_assert!(stretch >= 1.0, "a flattened metric needs stretch >= 1 to keep pruning exact");
+    let s1 = stretch - 1.0;
+    move |d: Vec3| {
+        let t = normal.dot(d);
+        d.length_squared() + s1 * t * t
+    }
+}
+
+/// The smallest `f32` strictly greater than `x` for finite non-negative `x` (so that `d2 < limit`
+/// means `d2 ≤ x`); infinity stays infinity.
+#[inline]
+fn inclusive_limit(x: f32) -> f32 {
+    if x.is_finite() {
+        f32::from_bits(x.to_bits() + 1)
+    } else {
+        x
+    }
+}
+
+/// Inserts into the bounded max-heap `heap` (capacity `k`, largest `dist2` at index 0), which is
+/// only called with `d2 < *limit`, and keeps `*limit` = the heap's top once it is full.
+#[inline(always)]
+fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, index: usize, d2: f32, limit: &mut f32) {
+    let item = Neighbor { index: index as u32, dist2: d2 };
+    if heap.len() < k {
+        // Sift up.
+        let mut i = heap.len();
+        heap.push(item);
+        while i > 0 {
+            let parent = (i - 1) / 2;
+            if heap[parent].dist2 >= d2 {
+                break;
+            }
+            heap[i] = heap[parent];
+            i = parent;
+        }
+        heap[i] = item;
+        if heap.len() == k {
+            *limit = heap[0].dist2;
+        }
+    } else {
+        // Replace the top, sift down.
+        let n = heap.len();
+        let mut i = 0;
+        loop {
+            let l = 2 * i + 1;
+            if l >= n {
+                break;
+            }
+            let r = l + 1;
+            let c = if r < n && heap[r].dist2 > heap[l].dist2 { r } else { l };
+            if heap[c].dist2 <= d2 {
+                break;
+            }
+            heap[i] = heap[c];
+            i = c;
+        }
+        heap[i] = item;
+        *limit = heap[0].dist2;
+    }
+}
+
+impl<T: KdPoint> KdTree<T> {
+    /// The (up to) `k` items nearest to `p` with distance at most `max_radius`.
+    ///
+    /// `out` is cleared and receives the result as a binary max-heap on [`Neighbor::dist2`]:
+    /// the order is unspecified except that `out[0]` is the farthest result (the radius of the
+    /// gathered disc, as the density estimate needs). Ties at the k-th distance are broken
+    /// arbitrarily. Nothing is allocated once `out` has capacity `k`.
+    #[inline]
+    pub fn knn(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>) {
+        self.knn_with(p, k, max_radius, |d: Vec3| d.length_squared(), out)
+    }
+
+    /// [`KdTree::knn`] with a custom squared metric `dist2(item - p)`; `max_radius²` bounds the
+    /// metric and [`Neighbor::dist2`] holds metric values.
+    ///
+    /// **Correctness requirement:** `dist2(d) ≥ d[a]²` for every axis `a` (true for any metric
+    /// `≥ |d|²`, such as [`flattened_metric`] with `stretch ≥ 1`); otherwise results may miss
+    /// items that a linear scan would find.
+    pub fn knn_with<F: Fn(Vec3) -> f32>(
+        &self,
+        p: Vec3,
+        k: usize,
+        max_radius: f32,
+        dist2: F,
+        out: &mut Vec<Neighbor>,
+    ) {
+        out.clear();
+        if k == 0 || self.items.is_empty() || !(max_radius >= 0.0) {
+            return;
+        }
+        let items = &self.items[..];
+        let mut limit = inclusive_limit(max_radius * max_radius);
+        let mut stack = [Frame::default(); STACK_SIZE];
+        let mut sp = 0usize;
+        let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
+        'walk: loop {
+            let n = hi - lo;
+            if n <= LEAF_SIZE {
+                for (i, it) in items[lo..hi].iter().enumerate() {
+                    let d2 = dist2(it.position() - p);
+                    if d2 < limit {
+                        heap_insert(out, k, lo + i, d2, &mut limit);
+                    }
+                }
+            } else {
+                let mid = lo + n / 2;
+                let s = items[mid].position();
+                let d2 = dist2(s - p);
+                let code = self.code(id);
+                if code == CODE_DEGENERATE {
+                    // Every item of lo..hi is at `s`: insert until the heap is full of them.
+                    let mut i = lo;
+                    while i < hi && d2 < limit {
+                        heap_insert(out, k, i, d2, &mut limit);
+                        i += 1;
+                    }
+                } else {
+                    if d2 < limit {
+                        heap_insert(out, k, mid, d2, &mut limit);
+                    }
+                    let diff = p[code as usize] - s[code as usize];
+                    let plane2 = diff * diff;
+                    let (l, r) = (2 * id + 1, 2 * id + 2);
+                    let (near, far) = if diff < 0.0 {
+                        ((lo, mid, l), (mid + 1, hi, r))
+                    } else {
+                        ((mid + 1, hi, r), (lo, mid, l))
+                    };
+                    if plane2 < limit {
+                        stack[sp] =
+                            Frame { lo: far.0 as u32, hi: far.1 as u32, id: far.2 as u32, d2: plane2 };
+                        sp += 1;
+                    }
+                    (lo, hi, id) = near;
+                    continue 'walk;
+                }
+            }
+            // Pop the next far subtree that the (possibly shrunk) radius still reaches.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let f = stack[sp];
+                if f.d2 < limit {
+                    (lo, hi, id) = (f.lo as usize, f.hi as usize, f.id as usize);
+                    continue 'walk;
+                }
+            }
+        }
+    }
+
+    /// All items within distance `radius` of `p` (inclusive), in unspecified order; `out` is
+    /// cleared first.
+    pub fn within_radius(&self, p: Vec3, radius: f32, out: &mut Vec<Neighbor>) {
+        out.clear();
+        self.for_each_within(p, radius, |index, dist2| out.push(Neighbor { index, dist2 }));
+    }
+
+    /// Calls `f(index, dist2)` for every item within distance `radius` of `p` (inclusive).
+    #[inline]
+    pub fn for_each_within<G: FnMut(u32, f32)>(&self, p: Vec3, radius: f32, f: G) {
+        self.for_each_within_with(p, radius, |d: Vec3| d.length_squared(), f)
+    }
+
+    /// [`KdTree::for_each_within`] with a custom squared metric of `item - p`; the same
+    /// requirement as for [`KdTree::knn_with`] applies (`dist2(d) ≥ d[a]²` on every axis).
+    pub fn for_each_within_with<F: Fn(Vec3) -> f32, G: FnMut(u32, f32)>(
+        &self,
+        p: Vec3,
+        radius: f32,
+        dist2: F,
+        mut f: G,
+    ) {
+        if self.items.is_empty() || !(radius >= 0.0) {
+            return;
+        }
+        let items = &self.items[..];
+        let limit = inclusive_limit(radius * radius);
+        let mut stack = [(0u32, 0u32, 0u32); STACK_SIZE];
+        let mut sp = 0usize;
+        let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
+        'walk: loop {
+            let n = hi - lo;
+            if n <= LEAF_SIZE {
+                for (i, it) in items[lo..hi].iter().enumerate() {
+                    let d2 = dist2(it.position() - p);
+                    if d2 < limit {
+                        f((lo + i) as u32, d2);
+                    }
+                }
+            } else {
+                let mid = lo + n / 2;
+                let s = items[mid].position();
+                let d2 = dist2(s - p);
+                let code = self.code(id);
+                if code == CODE_DEGENERATE {
+                    if d2 < limit {
+                        (lo..hi).for_each(|i| f(i as u32, d2));
+                    }
+                } else {
+                    if d2 < limit {
+                        f(mid as u32, d2);
+                    }
+                    let diff = p[code as usize] - s[code as usize];
+                    let (l, r) = (2 * id + 1, 2 * id + 2);
+                    let (near, far) = if diff < 0.0 {
+                        ((lo, mid, l), (mid + 1, hi, r))
+                    } else {
+                        ((mid + 1, hi, r), (lo, mid, l))
+                    };
+                    if diff * diff < limit {
+                        stack[sp] = (far.0 as u32, far.1 as u32, far.2 as u32);
+                        sp += 1;
+                    }
+                    (lo, hi, id) = near;
+                    continue 'walk;
+                }
+            }
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            let (a, b, c) = stack[sp];
+            (lo, hi, id) = (a as usize, b as usize, c as usize);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heap_keeps_k_smallest() {
+        let mut h = Vec::new();
+        let mut limit = f32::INFINITY;
+        let ds = [5.0, 1.0, 9.0, 3.0, 7.0, 2.0, 8.0, 0.5];
+        for (i, &d) in ds.iter().enumerate() {
+            if d < limit {
+                heap_insert(&mut h, 3, i, d, &mut limit);
+            }
+        }
+        let mut got: Vec<f32> = h.iter().map(|n| n.dist2).collect();
+        assert_eq!(h[0].dist2, 2.0);
+        got.sort_by(f32::total_cmp);
+        assert_eq!(got, vec![0.5, 1.0, 2.0]);
+        assert_eq!(limit, 2.0);
+    }
+
+    #[test]
+    fn inclusive_radius() {
+        let t = KdTree::build(vec![Vec3::new(1.0, 0.0, 0.0), Vec3::ZERO]);
+        let mut out = Vec::new();
+        t.knn(Vec3::ZERO, 5, 1.0, &mut out);
+        assert_eq!(out.len(), 2);
+        t.within_radius(Vec3::ZERO, 1.0, &mut out);
+        assert_eq!(out.len(), 2);
+        t.within_radius(Vec3::ZERO, 0.999, &mut out);
+        assert_eq!(out.len(), 1);
+    }
+}
