@@ -12,3 +12,4 @@ pub mod accel;
 pub mod geometry;
 pub mod light;
 pub mod material;
+pub mod sampling;
