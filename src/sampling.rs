@@ -261,8 +261,8 @@ mod tests {
         for u in grid(n) {
             let c = sample_cosine_hemisphere(u);
             assert!((c.length() - 1.0).abs() < 1e-5 && c.z >= 0.0);
-            // E[1/pdf] over the hemisphere = 2 pi (its solid angle).
-            cos_mean += (1.0 / cosine_hemisphere_pdf(c.z).max(1e-3)) as f64;
+            // E[cos] under the cosine density = int cos^2 / pi = 2/3.
+            cos_mean += c.z as f64;
             let h = sample_uniform_hemisphere(u);
             hemi += h.z as f64; // E[cos] = 1/2
             let s = sample_uniform_sphere(u);
@@ -272,7 +272,8 @@ mod tests {
             disk_r2 += d.length_squared() as f64; // E[r^2] = 1/2
         }
         let m = (n * n) as f64;
-        assert!((cos_mean / m / (2.0 * std::f64::consts::PI) - 1.0).abs() < 0.02);
+        assert!((cos_mean / m - 2.0 / 3.0).abs() < 1e-3);
+        assert!((cosine_hemisphere_pdf(0.5) - 0.5 / PI).abs() < 1e-7 && cosine_hemisphere_pdf(-0.1) == 0.0);
         assert!((hemi / m - 0.5).abs() < 1e-3);
         assert!((sphere_z / m - 1.0 / 3.0).abs() < 1e-3);
         assert!((disk_r2 / m - 0.5).abs() < 1e-3);
