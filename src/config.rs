@@ -164,14 +164,19 @@ impl RenderConfig {
     fn validate(&self) -> Result<(), ConfigError> {
         let side = crate::scene::MAX_IMAGE_SIDE;
         if self.width == 0 || self.height == 0 || self.width > side || self.height > side {
-            return Err(bad("width/height", format!("{}x{} is not within 1..={side} per side", self.width, self.height)));
+            return Err(bad(
+                "width/height",
+                format!("{}x{} is not within 1..={side} per side", self.width, self.height),
+            ));
         }
         for (field, n) in [("photons", self.photons), ("caustic_photons", self.caustic_photons)] {
             if n > MAX_PHOTONS {
                 let gb = (n as f64 * BYTES_PER_PHOTON as f64) / 1e9;
                 return Err(bad(
                     field,
-                    format!("{n} photons would need about {gb:.0} GB for the map alone; at most {MAX_PHOTONS}"),
+                    format!(
+                        "{n} photons would need about {gb:.0} GB for the map alone; at most {MAX_PHOTONS}"
+                    ),
                 ));
             }
         }
@@ -186,9 +191,14 @@ impl RenderConfig {
             return Err(bad("gather_photons", format!("{} is not in 1..=10000", self.gather_photons)));
         }
         if self.caustic_gather_photons == 0 || self.caustic_gather_photons > 10_000 {
-            return Err(bad("caustic_gather_photons", format!("{} is not in 1..=10000", self.caustic_gather_photons)));
+            return Err(bad(
+                "caustic_gather_photons",
+                format!("{} is not in 1..=10000", self.caustic_gather_photons),
+            ));
         }
-        for (field, r) in [("gather_radius", self.gather_radius), ("caustic_gather_radius", self.caustic_gather_radius)] {
+        for (field, r) in
+            [("gather_radius", self.gather_radius), ("caustic_gather_radius", self.caustic_gather_radius)]
+        {
             if let Some(r) = r {
                 if !(r.is_finite() && r > 0.0) {
                     return Err(bad(field, format!("{r} must be finite and positive")));

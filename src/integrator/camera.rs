@@ -9,8 +9,8 @@ use crate::accel::Accel;
 use crate::config::IndirectMode;
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::{face_forward, Material};
-use crate::photon::map::PhotonMaps;
 use crate::photon::kdtree::Neighbor;
+use crate::photon::map::PhotonMaps;
 use glam::Vec3;
 use rand::Rng;
 use rand_pcg::Pcg32;
@@ -119,13 +119,29 @@ impl<A: Accel> Shared<'_, A> {
         let mut l = direct_light(self, hit, wo, m, self.cfg.light_samples, rng, c);
         if !self.maps.caustic.is_empty() {
             c.queries += self.maps.caustic.len() as u64;
-            l += PhotonMaps::radiance(&self.maps.caustic, hit.p, hit.n, wo, m, &self.caustic_gather, &mut scratch.neighbors);
+            l += PhotonMaps::radiance(
+                &self.maps.caustic,
+                hit.p,
+                hit.n,
+                wo,
+                m,
+                &self.caustic_gather,
+                &mut scratch.neighbors,
+            );
         }
         if !self.maps.indirect.is_empty() {
             l += match self.cfg.indirect {
                 IndirectMode::Estimate => {
                     c.queries += self.maps.indirect.len() as u64;
-                    PhotonMaps::radiance(&self.maps.indirect, hit.p, hit.n, wo, m, &self.gather, &mut scratch.neighbors)
+                    PhotonMaps::radiance(
+                        &self.maps.indirect,
+                        hit.p,
+                        hit.n,
+                        wo,
+                        m,
+                        &self.gather,
+                        &mut scratch.neighbors,
+                    )
                 }
                 IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
             };
@@ -168,8 +184,24 @@ impl<A: Accel> Shared<'_, A> {
                 }
                 let mut ly = direct_light(self, &y, wy, my, 1, rng, c);
                 c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
-                ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &self.caustic_gather, &mut scratch.neighbors);
-                ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &self.gather, &mut scratch.neighbors);
+                ly += PhotonMaps::radiance(
+                    &self.maps.caustic,
+                    y.p,
+                    y.n,
+                    wy,
+                    my,
+                    &self.caustic_gather,
+                    &mut scratch.neighbors,
+                );
+                ly += PhotonMaps::radiance(
+                    &self.maps.indirect,
+                    y.p,
+                    y.n,
+                    wy,
+                    my,
+                    &self.gather,
+                    &mut scratch.neighbors,
+                );
                 sum += beta * ly;
                 break;
             }

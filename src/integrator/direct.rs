@@ -47,7 +47,11 @@ pub fn direct_light<A: Accel>(
             let f = m.eval(hit.n, wo, ls.wi);
             if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, ls.wi, ls.dist, c) {
                 let cos = hit.n.dot(ls.wi).abs();
-                let w = if glossy && !ls.delta { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) } else { 1.0 };
+                let w = if glossy && !ls.delta {
+                    power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi))
+                } else {
+                    1.0
+                };
                 sum += f * ls.li * (cos * w / ls.pdf);
             }
         }

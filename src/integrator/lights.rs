@@ -99,6 +99,7 @@ impl LightSet {
             (Some(t), Light::Area(a)) => a.sample_emission_on_triangle(t, u_pos, u_dir)?,
             (_, l) => l.sample_emission(u_pos, u_dir)?,
         };
-        (s.dir.is_finite() && s.ray_origin.is_finite()).then_some(Emission { origin: s.ray_origin, dir: s.dir })
+        (s.dir.is_finite() && s.ray_origin.is_finite())
+            .then_some(Emission { origin: s.ray_origin, dir: s.dir })
     }
 }

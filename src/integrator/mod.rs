@@ -96,7 +96,13 @@ pub struct RenderOutput {
 
 /// Renders `scene` with `accel` as `cfg` says. `stats` arrives with the stages already run
 /// (loading, acceleration build) and is completed here.
-pub fn render<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, progress: &dyn Progress, mut stats: Stats) -> RenderOutput {
+pub fn render<A: Accel>(
+    scene: &Scene,
+    accel: &A,
+    cfg: &RenderConfig,
+    progress: &dyn Progress,
+    mut stats: Stats,
+) -> RenderOutput {
     let start = std::time::Instant::now();
     let lights = stats.run("lights", "prepare emitters and light sampling", |_| LightSet::new(scene));
     let analysis = Analysis::of(scene, &lights);
@@ -131,7 +137,8 @@ pub fn render<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, progress: 
             });
             progress.finish();
             stats.rays.photon += out.rays;
-            maps.indirect = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
+            maps.indirect =
+                stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
             record_maps(&mut stats, "indirect", &maps.indirect);
         }
     }
@@ -157,8 +164,13 @@ pub fn render<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, progress: 
                 stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
             } else {
                 // Tries such that about `caustic_photons` photons are aimed at the targets.
-                let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64).min(cfg.caustic_photons.saturating_mul(1000));
-                let reason = format!("{} specular targets, {:.2}% of emission aimed at them", targets.len(), 100.0 * acceptance);
+                let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64)
+                    .min(cfg.caustic_photons.saturating_mul(1000));
+                let reason = format!(
+                    "{} specular targets, {:.2}% of emission aimed at them",
+                    targets.len(),
+                    100.0 * acceptance
+                );
                 progress.start("caustic photons", tries);
                 let out = stats.run("photons.caustic", reason, |_| {
                     let spec = trace::PassSpec {
@@ -173,7 +185,8 @@ pub fn render<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, progress: 
                 });
                 progress.finish();
                 stats.rays.photon += out.rays;
-                maps.caustic = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
+                maps.caustic =
+                    stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
                 record_maps(&mut stats, "caustic", &maps.caustic);
             }
         }
@@ -244,7 +257,9 @@ fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
     let names = ["r", "g", "b"];
     for (i, m) in maps.iter().enumerate() {
         let name = if maps.len() == 1 { kind.to_string() } else { format!("{kind}.{}", names[i]) };
-        stats.photons.insert(name, MapStats { emitted: m.emitted, stored: m.len() as u64, bytes: m.bytes() as u64 });
+        stats
+            .photons
+            .insert(name, MapStats { emitted: m.emitted, stored: m.len() as u64, bytes: m.bytes() as u64 });
     }
 }
 

@@ -84,7 +84,7 @@ impl PhotonMap {
                 pos: h.pos.to_array(),
                 dir: pack::encode_dir_oct(h.wi),
                 power: match color {
-                    MapColor::Rgb => pack::encode_rgb9e5(h.power),
+                    MapColor::Rgb => pack::rgb9e5_encode(h.power),
                     MapColor::Channel(c) => h.power[c].to_bits(),
                 },
             })
@@ -108,7 +108,7 @@ impl PhotonMap {
     #[inline]
     fn power(&self, p: &Photon) -> Vec3 {
         match self.color {
-            Some(MapColor::Rgb) => pack::decode_rgb9e5(p.power),
+            Some(MapColor::Rgb) => pack::rgb9e5_decode(p.power),
             Some(MapColor::Channel(c)) => {
                 let mut v = Vec3::ZERO;
                 v[c] = f32::from_bits(p.power);
@@ -140,7 +140,8 @@ impl PhotonMap {
         }
         // With k photons found the disc reaches the farthest; with fewer, the whole search disc
         // was empty beyond them, so its area is the search area.
-        let r2 = if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
+        let r2 =
+            if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
         if !(r2 > 0.0) {
             return Vec3::ZERO;
         }
@@ -167,7 +168,8 @@ impl PhotonMap {
         if scratch.is_empty() {
             return Vec3::ZERO;
         }
-        let r2 = if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
+        let r2 =
+            if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
         if !(r2 > 0.0) {
             return Vec3::ZERO;
         }
@@ -242,7 +244,8 @@ mod tests {
             let mut integral = 0.0f64;
             for i in 0..n {
                 let r = (i as f64 + 0.5) / n as f64;
-                integral += kernel_weight(kernel, (r * r) as f32, 50) as f64 * 2.0 * std::f64::consts::PI * r / n as f64;
+                integral += kernel_weight(kernel, (r * r) as f32, 50) as f64 * 2.0 * std::f64::consts::PI * r
+                    / n as f64;
             }
             let expect = std::f64::consts::PI;
             // Jensen's Gaussian constants are normalised to about 0.5 %.

@@ -26,4 +26,6 @@
 //! exactly 20 B; not worth it, since the separate code array is tiny and stays in cache.)
 
 pub mod kdtree;
+pub mod map;
 pub mod pack;
+pub mod trace;

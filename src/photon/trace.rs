@@ -232,7 +232,17 @@ pub fn trace_pass<A: Accel>(
                     continue;
                 }
                 paths += 1;
-                rays += trace_photon(scene, accel, pass, em.origin, em.dir, job, max_bounces, &mut rng, &mut out[job.map]);
+                rays += trace_photon(
+                    scene,
+                    accel,
+                    pass,
+                    em.origin,
+                    em.dir,
+                    job,
+                    max_bounces,
+                    &mut rng,
+                    &mut out[job.map],
+                );
             }
             progress.advance(end - start);
             (out, rays, paths)
@@ -291,7 +301,9 @@ fn trace_photon<A: Accel>(
         if bounce == max_bounces {
             break;
         }
-        let Some(s) = m.scatter_photon(n, wo, power, job.channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()]) else {
+        let Some(s) =
+            m.scatter_photon(n, wo, power, job.channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()])
+        else {
             break;
         };
         if matches!(s.kind, LobeKind::Diffuse | LobeKind::Glossy) {
