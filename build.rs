@@ -48,7 +48,7 @@ mod embree {
         let include = dir.join("include");
         let major = headers_in(&include).unwrap_or_else(|| {
             panic!(
-                "EMBREE_DIR={}: no include/embree4/rtcore.h or include/embree3/rtcore.h there",
+                "EMBREE_DIR={}: no include/embree4/rtcore.h or include/embree3/rtcore.h there. {NOT_FOUND}",
                 dir.display()
             )
         });
@@ -146,6 +146,13 @@ mod embree {
 
         let check_only = env::var("PHOTONMAP_EMBREE_CHECK_ONLY").is_ok_and(|v| v == "1");
         if !check_only {
+            if install.rpath && install.lib_dirs.is_empty() && env::var_os("EMBREE_DIR").is_some() {
+                panic!(
+                    "{}: no libembree{major}.so in lib/, lib64/ or lib/<multiarch>/ \
+                     (set PHOTONMAP_EMBREE_CHECK_ONLY=1 to only type-check against the headers)",
+                    install.found_by
+                );
+            }
             for dir in &install.lib_dirs {
                 println!("cargo:rustc-link-search=native={}", dir.display());
                 if install.rpath {
