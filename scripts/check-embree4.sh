@@ -36,6 +36,7 @@ else
         -o "Dir::State::Lists=$APT_DIR/lists"
         -o "Dir::Cache=$APT_DIR/cache"
         -o "Debug::NoLocking=1"
+        -o "APT::Sandbox::User=$(id -un)"
     )
     echo "check-embree4: fetching the $SUITE package lists into $APT_DIR"
     apt-get "${APT_OPTS[@]}" -q update || fail "apt-get update for $SUITE"

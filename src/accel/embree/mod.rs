@@ -1,9 +1,9 @@
 //! Intel Embree (3 or 4, whichever `build.rs` found) behind the [`Accel`] trait.
 //!
-//! This module wraps Embree's C API (`rtcore.h`): devices (`RTCDevice`, [`device`]), committed
-//! scenes with one shared-buffer triangle geometry (`RTCScene`, [`scene`]), single-ray queries
+//! This module wraps Embree's C API (`rtcore.h`): devices (`RTCDevice`, `device`), committed
+//! scenes with one shared-buffer triangle geometry (`RTCScene`, `scene`), single-ray queries
 //! (`rtcIntersect1` / `rtcOccluded1`) and 8-wide packets (`rtcIntersect8` / `rtcOccluded8`,
-//! [`packet`]). The version differences live in [`api`], the raw bindings in [`sys`].
+//! `packet`). The version differences live in `api`, the raw bindings in `sys`.
 //!
 //! All of the crate's `unsafe` code is in this module; every block states why it is sound.
 //!

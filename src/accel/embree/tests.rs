@@ -227,3 +227,14 @@ fn flush_denormals_sets_ftz() {
     let accel = EmbreeAccel::build(&quad(), AccelOptions::default()).unwrap();
     assert!(accel.occluded(&Ray::new(Vec3::new(0.5, 0.5, 1.0), -Vec3::Z)));
 }
+
+#[test]
+fn linked_library_matches_the_headers() {
+    let device = Device::new(DEVICE_CONFIG).unwrap();
+    // SAFETY: a live device and a valid property.
+    let linked = unsafe { sys::rtcGetDeviceProperty(device.raw(), sys::RTC_DEVICE_PROPERTY_VERSION) };
+    device.check("rtcGetDeviceProperty").unwrap();
+    assert_eq!(linked as u32, sys::RTC_VERSION, "headers {} vs linked library {linked}", version());
+    let [major, minor, patch] = [sys::RTC_VERSION_MAJOR, sys::RTC_VERSION_MINOR, sys::RTC_VERSION_PATCH];
+    assert_eq!(version(), format!("{major}.{minor}.{patch}"));
+}
