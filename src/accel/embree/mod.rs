@@ -48,7 +48,6 @@ impl EmbreeAccel {
     /// quality and, if `options.robust`, `RTC_SCENE_FLAG_ROBUST`. An empty mesh gives an empty
     /// scene that every ray misses.
     pub fn build(mesh: &TriangleMesh, options: AccelOptions) -> Result<EmbreeAccel, AccelError> {
-        mesh.validate()?;
         let device = Arc::new(Device::new(DEVICE_CONFIG)?);
         let scene = Scene::commit(device, mesh, options)?;
         Ok(EmbreeAccel { scene })

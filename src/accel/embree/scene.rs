@@ -49,14 +49,15 @@ fn quality(q: BuildQuality) -> sys::RTCBuildQuality {
 }
 
 impl Scene {
-    /// Builds and commits a scene for `mesh`, which must have passed [`TriangleMesh::validate`]
-    /// (indices in range: Embree does not check them). An empty mesh gives a valid empty scene.
+    /// Builds and commits a scene for `mesh`. The mesh is validated here, next to the unsafe
+    /// code that relies on it: Embree does not check indices. An empty mesh gives a valid empty
+    /// scene.
     pub fn commit(
         device: Arc<Device>,
         mesh: &TriangleMesh,
         options: AccelOptions,
     ) -> Result<Self, AccelError> {
-        debug_assert!(mesh.validate().is_ok());
+        mesh.validate()?;
         // SAFETY: the device is live (we hold an Arc).
         let raw = unsafe { sys::rtcNewScene(device.raw()) };
         if raw.is_null() {
