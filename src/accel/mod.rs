@@ -133,7 +133,10 @@ impl AnyAccel {
             #[cfg(feature = "embree")]
             AccelKind::Embree => Ok(AnyAccel::Embree(embree::EmbreeAccel::build(mesh, options)?)),
             #[cfg(not(feature = "embree"))]
-            AccelKind::Embree => Err(AccelError::EmbreeNotBuilt),
+            AccelKind::Embree => {
+                let _ = options; // only Embree uses the options
+                Err(AccelError::EmbreeNotBuilt)
+            }
             AccelKind::Bvh => Ok(AnyAccel::Bvh(bvh::Bvh::build(mesh))),
             AccelKind::Naive => Ok(AnyAccel::Naive(naive::Naive::new(mesh))),
         }
