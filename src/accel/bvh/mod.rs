@@ -2,7 +2,8 @@
 //!
 //! * **Build** ([`build`]): binned SAH after Wald, "On fast Construction of SAH-based Bounding
 //!   Volume Hierarchies" (IEEE RT 2007), parallel over subtrees with rayon, flattened into
-//!   32-byte [`Node`]s in depth-first order (first child adjacent, second child by index).
+//!   32-byte [`Node`]s. Siblings are stored together as a 64-byte [`NodePair`] (one cache line,
+//!   so both children are tested with one fetch); pairs are in depth-first order.
 //!   Triangles are copied into leaf order as vertex triples, so a leaf's triangles are contiguous
 //!   in memory; their original indices are kept for [`Hit::prim`]. Triangles of zero area (or
 //!   with non-finite corners) are left out: they can never be hit.
@@ -23,7 +24,7 @@
 mod build;
 mod node;
 
-pub use node::Node;
+pub use node::{Node, NodePair};
 
 use super::triangle::{TriHit, WatertightRay};
 use super::{Accel, Hit};
@@ -41,7 +42,9 @@ const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f3
 /// A binary BVH over one triangle mesh; see the [module docs](self).
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
-    nodes: Vec<Node>,
+    /// The root (`None` for an empty BVH); interior nodes point at their children's pair.
+    root: Option<Node>,
+    pairs: Vec<NodePair>,
     /// Triangle corners in leaf order.
     tris: Vec<[Vec3; 3]>,
     /// Original triangle index of each entry of `tris`.
@@ -65,6 +68,8 @@ impl BoxRay {
     }
 
     /// Whether the ray enters `node` within `(t_min, t_max)`, and its entry distance.
+    // `!(near > far)`: a NaN must pass the test (conservative), which `near <= far` would not.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     #[inline(always)]
     fn hit(&self, node: &Node, t_max: f32) -> (bool, f32) {
         let t0 = (node.min_a() - self.org) * self.inv;
@@ -92,10 +97,10 @@ impl Bvh {
                 Some(PrimRef { bounds: Box3 { min: a.min(b).min(c), max: a.max(b).max(c) }, id: i })
             })
             .collect();
-        let nodes = build::build(&mut prims);
+        let (root, pairs) = build::build(&mut prims).unzip();
         let prim_ids: Vec<u32> = prims.iter().map(|p| p.id).collect();
         let tris = prim_ids.par_iter().map(|&i| mesh.triangle(i)).collect();
-        let bvh = Bvh { nodes, tris, prim_ids };
+        let bvh = Bvh { root, pairs: pairs.unwrap_or_default(), tris, prim_ids };
         if cfg!(debug_assertions) {
             if let Err(e) = bvh.validate(mesh) {
                 panic!("invalid BVH: {e}");
@@ -106,7 +111,7 @@ impl Bvh {
 
     /// Number of nodes (interior and leaves).
     pub fn node_count(&self) -> usize {
-        self.nodes.len()
+        self.root.map_or(0, |_| 1 + 2 * self.pairs.len())
     }
 
     /// Number of triangles indexed (the mesh's triangles minus the degenerate ones).
@@ -114,9 +119,14 @@ impl Bvh {
         self.tris.len()
     }
 
-    /// The flattened nodes, root first.
-    pub fn nodes(&self) -> &[Node] {
-        &self.nodes
+    /// The root node, or `None` for an empty BVH.
+    pub fn root(&self) -> Option<&Node> {
+        self.root.as_ref()
+    }
+
+    /// The sibling pairs in depth-first order; an interior node's `offset` indexes this.
+    pub fn pairs(&self) -> &[NodePair] {
+        &self.pairs
     }
 
     /// Checks the structure: every indexed triangle in exactly one leaf, child bounds inside
@@ -131,49 +141,47 @@ impl Bvh {
                 return Err(format!("prim {id} appears twice"));
             }
         }
-        if self.nodes.is_empty() {
+        let Some(root) = self.root else {
             return if self.tris.is_empty() { Ok(()) } else { Err("triangles but no nodes".into()) };
-        }
+        };
         let inside = |inner: &Node, outer: &Node| {
             (0..3).all(|k| inner.min[k] >= outer.min[k] && inner.max[k] <= outer.max[k])
         };
-        let mut todo = vec![(0usize, 1usize)];
-        let mut visited = 0;
-        while let Some((i, depth)) = todo.pop() {
-            visited += 1;
+        let mut todo = vec![(root, 1usize)];
+        let mut pairs_seen = vec![false; self.pairs.len()];
+        while let Some((n, depth)) = todo.pop() {
             if depth >= STACK {
                 return Err(format!("depth {depth} exceeds the traversal stack"));
             }
-            let n = self.nodes.get(i).ok_or(format!("node {i} out of range"))?;
             if n.is_leaf() {
                 let (s, c) = (n.offset as usize, n.count() as usize);
                 for k in s..s + c {
-                    let slot = seen.get_mut(k).ok_or(format!("leaf {i} range out of bounds"))?;
+                    let slot = seen.get_mut(k).ok_or(format!("leaf range {s}+{c} out of bounds"))?;
                     *slot += 1;
                     let b = crate::geometry::Aabb::from_points(self.tris[k]);
                     if !(n.bounds().contains(b.min) && n.bounds().contains(b.max)) {
-                        return Err(format!("triangle {k} outside leaf {i}"));
+                        return Err(format!("triangle {k} outside its leaf"));
                     }
                     if self.tris[k] != mesh.triangle(self.prim_ids[k]) {
                         return Err(format!("triangle {k} does not match mesh prim {}", self.prim_ids[k]));
                     }
                 }
             } else {
-                let (l, r) = (i + 1, n.offset as usize);
-                if r <= l {
-                    return Err(format!("node {i}: second child {r} not after the first"));
+                let p = n.offset as usize;
+                let seen_pair = pairs_seen.get_mut(p).ok_or(format!("pair {p} out of range"))?;
+                if std::mem::replace(seen_pair, true) {
+                    return Err(format!("pair {p} has two parents"));
                 }
-                for c in [l, r] {
-                    let child = self.nodes.get(c).ok_or(format!("child {c} of {i} out of range"))?;
-                    if !inside(child, n) {
-                        return Err(format!("child {c} not inside parent {i}"));
+                for child in self.pairs[p].0 {
+                    if !inside(&child, &n) {
+                        return Err(format!("a child in pair {p} is not inside its parent"));
                     }
-                    todo.push((c, depth + 1));
+                    todo.push((child, depth + 1));
                 }
             }
         }
-        if visited != self.nodes.len() {
-            return Err(format!("{} of {} nodes reachable", visited, self.nodes.len()));
+        if let Some(p) = pairs_seen.iter().position(|s| !s) {
+            return Err(format!("pair {p} unreachable"));
         }
         if let Some(k) = seen.iter().position(|&s| s != 1) {
             return Err(format!("triangle {k} is in {} leaves", seen[k]));
@@ -184,7 +192,7 @@ impl Bvh {
     /// Ray validity shared by both queries: a finite origin and a finite non-zero direction.
     #[inline]
     fn usable(&self, ray: &Ray) -> bool {
-        !self.nodes.is_empty()
+        self.root.is_some()
             && ray.origin.is_finite()
             && ray.dir.is_finite()
             && ray.dir != Vec3::ZERO
@@ -193,19 +201,21 @@ impl Bvh {
 
     /// The shared traversal: calls `leaf` for each triangle of each visited leaf, in near-to-far
     /// order of the leaves' entry; `leaf` returns the new `t_max` and whether to stop.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // NaN entry distances are visited, not skipped
     #[inline(always)]
     fn traverse(&self, ray: &Ray, mut leaf: impl FnMut(usize, &[Vec3; 3], f32) -> (f32, bool)) {
         let br = BoxRay::new(ray);
         let mut t_max = ray.t_max;
-        let nodes = &self.nodes[..];
-        if !br.hit(&nodes[0], t_max).0 {
+        let Some(root) = &self.root else { return };
+        if !br.hit(root, t_max).0 {
             return;
         }
+        let pairs = &self.pairs[..];
+        // Entries are `2 * pair + slot` and the entry distance.
         let mut stack = [(0u32, 0f32); STACK];
         let mut sp = 0usize;
-        let mut idx = 0usize;
+        let mut node = root;
         'walk: loop {
-            let node = &nodes[idx];
             if node.is_leaf() {
                 let first = node.offset as usize;
                 let count = node.count() as usize;
@@ -217,23 +227,24 @@ impl Bvh {
                     t_max = t;
                 }
             } else {
-                let (l, r) = (idx + 1, node.offset as usize);
-                let (hl, tl) = br.hit(&nodes[l], t_max);
-                let (hr, tr) = br.hit(&nodes[r], t_max);
+                let p = node.offset as usize;
+                let [l, r] = &pairs[p].0;
+                let (hl, tl) = br.hit(l, t_max);
+                let (hr, tr) = br.hit(r, t_max);
                 match (hl, hr) {
                     (true, true) => {
-                        let (near, far, t_far) = if tl <= tr { (l, r, tr) } else { (r, l, tl) };
-                        stack[sp] = (far as u32, t_far);
+                        let (near, far, t_far) = if tl <= tr { (l, 1, tr) } else { (r, 0, tl) };
+                        stack[sp] = ((2 * p + far) as u32, t_far);
                         sp += 1;
-                        idx = near;
+                        node = near;
                         continue 'walk;
                     }
                     (true, false) => {
-                        idx = l;
+                        node = l;
                         continue 'walk;
                     }
                     (false, true) => {
-                        idx = r;
+                        node = r;
                         continue 'walk;
                     }
                     (false, false) => {}
@@ -245,9 +256,9 @@ impl Bvh {
                     return;
                 }
                 sp -= 1;
-                let (n, t_near) = stack[sp];
+                let (e, t_near) = stack[sp];
                 if !(t_near > t_max * EXIT_SCALE) {
-                    idx = n as usize;
+                    node = &pairs[(e >> 1) as usize].0[(e & 1) as usize];
                     continue 'walk;
                 }
             }

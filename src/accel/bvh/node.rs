@@ -1,8 +1,9 @@
-//! The flattened node of the BVH: 32 bytes, two per 64-byte cache line.
+//! The flattened node of the BVH: 32 bytes, two siblings per 64-byte cache line.
 //!
-//! Nodes are stored in depth-first order: an interior node's first child follows it directly
-//! (`index + 1`), so only the second child's index is stored. A leaf stores the range of its
-//! triangles in the leaf-ordered triangle array instead.
+//! The two children of an interior node are stored side by side as a [`NodePair`] aligned to a
+//! cache line, so the traversal tests both with a single memory fetch; pairs are laid out in
+//! depth-first order. An interior node stores the index of its children's pair, a leaf the
+//! range of its triangles in the leaf-ordered triangle array.
 
 use crate::geometry::Aabb;
 use glam::{Vec3, Vec3A};
@@ -10,13 +11,14 @@ use glam::{Vec3, Vec3A};
 /// Number of bits of `meta` holding the split axis; the rest holds the leaf's triangle count.
 const AXIS_BITS: u32 = 2;
 
-/// One BVH node: bounds (`min`, `max`), then either the second child's index (interior) or the
+/// One BVH node: bounds (`min`, `max`), then either the children's pair index (interior) or the
 /// first triangle (leaf), and `count << 2 | axis` (`count == 0` for an interior node).
+/// An interior node's `offset` is the index of its children's [`NodePair`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 #[repr(C, align(32))]
 pub struct Node {
     pub min: [f32; 3],
-    /// Interior: index of the second child. Leaf: index of the first triangle.
+    /// Interior: index of the children's [`NodePair`]. Leaf: index of the first triangle.
     pub offset: u32,
     pub max: [f32; 3],
     /// `count << 2 | axis`; `count` is 0 for interior nodes.
@@ -24,6 +26,13 @@ pub struct Node {
 }
 
 const _: () = assert!(std::mem::size_of::<Node>() == 32);
+
+/// The two children of an interior node, in one 64-byte cache line.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(64))]
+pub struct NodePair(pub [Node; 2]);
+
+const _: () = assert!(std::mem::size_of::<NodePair>() == 64);
 
 impl Node {
     /// A leaf over triangles `first .. first + count` (`count >= 1`).
@@ -37,10 +46,10 @@ impl Node {
         }
     }
 
-    /// An interior node whose first child is the next node and whose second child is `second`.
-    pub fn interior(bounds: Aabb, second: u32, axis: u32) -> Self {
+    /// An interior node whose children are the pair at index `pair`.
+    pub fn interior(bounds: Aabb, pair: u32, axis: u32) -> Self {
         debug_assert!(axis < 3);
-        Node { min: bounds.min.to_array(), offset: second, max: bounds.max.to_array(), meta: axis }
+        Node { min: bounds.min.to_array(), offset: pair, max: bounds.max.to_array(), meta: axis }
     }
 
     #[inline(always)]
