@@ -9,6 +9,7 @@
 #![deny(unsafe_code)]
 
 pub mod accel;
+pub mod agree;
 pub mod config;
 pub mod film;
 pub mod geometry;

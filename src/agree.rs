@@ -1,0 +1,498 @@
+//! Agreement between ray-casting backends: the machinery behind `photonmap agree` and the
+//! backend tests.
+//!
+//! [`generate_rays`] makes a deterministic mix of rays that stress different parts of an
+//! accelerator ([`RayKind`]): coherent camera rays, random rays through the scene, rays leaving
+//! surfaces (self-intersection), grazing rays (nearly parallel to a surface) and shadow segments
+//! between two surface points. [`compare`] casts them through two backends and classifies every
+//! difference. Watertight triangle tests may legitimately differ where a ray passes within
+//! rounding distance of an edge or vertex, or where two triangles are hit at the same distance;
+//! such differences are counted as [`edge_ties`](AgreeReport::edge_ties), everything else is a
+//! real disagreement.
+
+use crate::accel::{Accel, Hit};
+use crate::geometry::{offset_ray_origin, Aabb, Ray, TriangleMesh, Vec3};
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg64;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::fmt;
+
+/// Tolerance of the edge-tie classification, in ULPs of the coordinates' magnitude.
+pub const TIE_ULPS: f32 = 64.0;
+/// Barycentric coordinates below this count as "on the edge" whatever the triangle's size.
+pub const TIE_BARYCENTRIC: f32 = 1e-5;
+
+/// What a generated ray is meant to exercise.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RayKind {
+    /// A pinhole grid from one eye point: coherent primary rays.
+    Camera,
+    /// Uniform origins inside the scene bounds, uniform directions: incoherent rays.
+    Random,
+    /// Leaving a surface point (offset origin), cosine or uniform over the hemisphere.
+    Surface,
+    /// Leaving a surface point 0.01°–1° above the tangent plane.
+    Grazing,
+    /// A segment between two surface points, `t_max` just below 1.
+    Shadow,
+}
+
+impl RayKind {
+    pub const ALL: [RayKind; 5] =
+        [RayKind::Camera, RayKind::Random, RayKind::Surface, RayKind::Grazing, RayKind::Shadow];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Camera => "camera",
+            RayKind::Random => "random",
+            RayKind::Surface => "surface",
+            RayKind::Grazing => "grazing",
+            RayKind::Shadow => "shadow",
+        }
+    }
+}
+
+/// Eye point and look-at point of the camera rays.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraLike {
+    pub eye: Vec3,
+    pub target: Vec3,
+}
+
+/// Picks surface points with probability proportional to area.
+struct SurfaceSampler<'a> {
+    mesh: &'a TriangleMesh,
+    prims: Vec<u32>,
+    cdf: Vec<f64>,
+}
+
+impl<'a> SurfaceSampler<'a> {
+    fn new(mesh: &'a TriangleMesh) -> Self {
+        let (mut prims, mut cdf, mut sum) = (Vec::new(), Vec::new(), 0.0f64);
+        for i in 0..mesh.len() as u32 {
+            let a = mesh.area(i) as f64;
+            if a > 0.0 && a.is_finite() && mesh.normal(i).is_some() {
+                sum += a;
+                prims.push(i);
+                cdf.push(sum);
+            }
+        }
+        SurfaceSampler { mesh, prims, cdf }
+    }
+
+    /// A point, its unit geometric normal, and its triangle; `None` without any area.
+    fn sample(&self, rng: &mut Pcg64) -> Option<(Vec3, Vec3)> {
+        let total = *self.cdf.last()?;
+        let x = rng.gen::<f64>() * total;
+        let k = self.cdf.partition_point(|&c| c <= x).min(self.prims.len() - 1);
+        let prim = self.prims[k];
+        let (r1, r2) = (rng.gen::<f32>().sqrt(), rng.gen::<f32>());
+        let (u, v) = (r1 * (1.0 - r2), r1 * r2);
+        Some((self.mesh.point(prim, u, v), self.mesh.normal(prim)?))
+    }
+}
+
+fn uniform_sphere(rng: &mut Pcg64) -> Vec3 {
+    let z = 1.0 - 2.0 * rng.gen::<f32>();
+    let phi = std::f32::consts::TAU * rng.gen::<f32>();
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// An orthonormal basis `(t, b)` perpendicular to unit `n` (Duff et al. 2017).
+fn basis(n: Vec3) -> (Vec3, Vec3) {
+    let s = 1.0f32.copysign(n.z);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    (Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), Vec3::new(b, s + n.y * n.y * a, -n.y))
+}
+
+/// Scene bounds, or a unit box for an empty mesh.
+fn scene_bounds(mesh: &TriangleMesh) -> Aabb {
+    let b = mesh.bounds();
+    if b.is_empty() {
+        Aabb { min: Vec3::splat(-1.0), max: Vec3::ONE }
+    } else {
+        b
+    }
+}
+
+fn random_ray(b: &Aabb, rng: &mut Pcg64) -> Ray {
+    let t = Vec3::new(rng.gen(), rng.gen(), rng.gen());
+    Ray::new(b.min + t * (b.max - b.min), uniform_sphere(rng))
+}
+
+fn camera_rays(b: &Aabb, cam: Option<CameraLike>, n: usize) -> Vec<Ray> {
+    let (centre, radius) = b.bounding_sphere();
+    let radius = if radius > 0.0 { radius } else { 1.0 };
+    let cam = cam.unwrap_or(CameraLike {
+        eye: centre + Vec3::new(0.35, 0.5, 1.0).normalize() * 2.5 * radius,
+        target: centre,
+    });
+    let forward = (cam.target - cam.eye).try_normalize().unwrap_or(-Vec3::Z);
+    let dist = (cam.target - cam.eye).length();
+    // Frame the bounding sphere from outside; 45° half-angle from inside it.
+    let tan_half = if dist > radius { 1.1 * radius / (dist * dist - radius * radius).sqrt() } else { 1.0 };
+    let up0 = if forward.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
+    let right = forward.cross(up0).normalize();
+    let up = right.cross(forward);
+    let side = (n as f64).sqrt().ceil().max(1.0) as usize;
+    (0..n)
+        .map(|k| {
+            let (i, j) = (k % side, k / side);
+            let sx = ((i as f32 + 0.5) / side as f32 * 2.0 - 1.0) * tan_half;
+            let sy = (1.0 - (j as f32 + 0.5) / side as f32 * 2.0) * tan_half;
+            Ray::new(cam.eye, forward + sx * right + sy * up)
+        })
+        .collect()
+}
+
+/// Generates `n` rays, about a fifth of each [`RayKind`], deterministically from `seed`.
+/// `camera_like` sets the camera rays' eye and target; by default the eye is outside the
+/// bounds looking at their centre. Meshes without any area get random rays instead of the
+/// surface-based kinds.
+pub fn generate_rays(
+    mesh: &TriangleMesh,
+    camera_like: Option<CameraLike>,
+    n: usize,
+    seed: u64,
+) -> Vec<(RayKind, Ray)> {
+    let bounds = scene_bounds(mesh);
+    let surf = SurfaceSampler::new(mesh);
+    let mut out = Vec::with_capacity(n);
+    for (k, kind) in RayKind::ALL.into_iter().enumerate() {
+        let count = n / 5 + usize::from(k < n % 5);
+        let mut rng = Pcg64::seed_from_u64(seed ^ (0x9e37_79b9_7f4a_7c15u64.wrapping_mul(k as u64 + 1)));
+        if kind == RayKind::Camera {
+            out.extend(camera_rays(&bounds, camera_like, count).into_iter().map(|r| (kind, r)));
+            continue;
+        }
+        for _ in 0..count {
+            let ray = match kind {
+                RayKind::Surface => surf.sample(&mut rng).map(|(p, n)| {
+                    let n = if rng.gen::<bool>() { n } else { -n };
+                    let (t, b) = basis(n);
+                    let (r1, r2) = (rng.gen::<f32>(), rng.gen::<f32>());
+                    // Cosine-weighted half the time, uniform over the hemisphere otherwise.
+                    let cos = if rng.gen::<bool>() { (1.0 - r1).sqrt() } else { 1.0 - r1 };
+                    let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                    let phi = std::f32::consts::TAU * r2;
+                    let dir = sin * phi.cos() * t + sin * phi.sin() * b + cos * n;
+                    Ray::new(offset_ray_origin(p, n), dir)
+                }),
+                RayKind::Grazing => surf.sample(&mut rng).map(|(p, n)| {
+                    let n = if rng.gen::<bool>() { n } else { -n };
+                    let (t, b) = basis(n);
+                    let phi = std::f32::consts::TAU * rng.gen::<f32>();
+                    // Log-uniform elevation between 0.01° and 1°.
+                    let elev = (0.01f32 * 100f32.powf(rng.gen::<f32>())).to_radians();
+                    let tangent = phi.cos() * t + phi.sin() * b;
+                    Ray::new(offset_ray_origin(p, n), elev.cos() * tangent + elev.sin() * n)
+                }),
+                RayKind::Shadow => {
+                    surf.sample(&mut rng).zip(surf.sample(&mut rng)).and_then(|((p, np), (q, nq))| {
+                        let d = q - p;
+                        let o = offset_ray_origin(p, if np.dot(d) >= 0.0 { np } else { -np });
+                        let e = offset_ray_origin(q, if nq.dot(d) <= 0.0 { nq } else { -nq });
+                        let dir = e - o;
+                        (dir != Vec3::ZERO).then(|| Ray::segment(o, dir, 0.0, 0.999))
+                    })
+                }
+                RayKind::Camera | RayKind::Random => None,
+            };
+            out.push((kind, ray.unwrap_or_else(|| random_ray(&bounds, &mut rng))));
+        }
+    }
+    out
+}
+
+/// Disagreement counts over a set of rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct KindReport {
+    pub rays: u64,
+    pub hit_miss_disagreements: u64,
+    pub edge_ties: u64,
+    pub primitive_disagreements: u64,
+    pub occlusion_disagreements: u64,
+    pub max_rel_dt: f64,
+}
+
+impl KindReport {
+    fn merge(self, o: KindReport) -> KindReport {
+        KindReport {
+            rays: self.rays + o.rays,
+            hit_miss_disagreements: self.hit_miss_disagreements + o.hit_miss_disagreements,
+            edge_ties: self.edge_ties + o.edge_ties,
+            primitive_disagreements: self.primitive_disagreements + o.primitive_disagreements,
+            occlusion_disagreements: self.occlusion_disagreements + o.occlusion_disagreements,
+            max_rel_dt: self.max_rel_dt.max(o.max_rel_dt),
+        }
+    }
+}
+
+/// The result of [`compare`]. Every closest-hit difference is counted exactly once: as an
+/// edge tie, else as a hit/miss or a primitive disagreement. Occlusion answers are compared
+/// separately.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct AgreeReport {
+    /// Names of the two backends compared, in argument order.
+    pub backends: Vec<String>,
+    pub rays: u64,
+    /// One backend hit, the other missed, and the hit is not within rounding of an edge.
+    pub hit_miss_disagreements: u64,
+    /// Differences (hit/miss or primitive) explained by a hit within [`TIE_ULPS`] ULPs (or
+    /// [`TIE_BARYCENTRIC`]) of an edge or vertex, or by two triangles at the same distance.
+    pub edge_ties: u64,
+    /// Both hit, different triangles, not a tie.
+    pub primitive_disagreements: u64,
+    /// `occluded` answered differently.
+    pub occlusion_disagreements: u64,
+    /// Largest `|t_a - t_b| / max(t_a, t_b)` where both hit the same triangle.
+    pub max_rel_dt: f64,
+    pub per_kind: BTreeMap<RayKind, KindReport>,
+}
+
+/// How two closest-hit answers relate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Verdict {
+    /// Same answer; `rel_dt` when both hit (the same triangle).
+    Agree {
+        rel_dt: Option<f64>,
+    },
+    HitMiss,
+    Primitive,
+    EdgeTie,
+}
+
+/// Whether a hit lies within rounding distance of an edge or vertex of its triangle: some
+/// barycentric below [`TIE_BARYCENTRIC`], or a distance to an edge line (from barycentrics and
+/// the triangle's heights) below [`TIE_ULPS`] ULPs of the largest coordinate. A hit on a
+/// zero-area triangle (all edge) always qualifies.
+pub fn near_edge(mesh: &TriangleMesh, hit: &Hit) -> bool {
+    if hit.prim as usize >= mesh.len() {
+        return false;
+    }
+    let [a, b, c] = mesh.triangle(hit.prim);
+    let area2 = (b - a).cross(c - a).length();
+    if !(area2 > 0.0 && area2.is_finite()) {
+        return true;
+    }
+    let bary = [1.0 - hit.u - hit.v, hit.u, hit.v];
+    let opposite = [(c - b).length(), (c - a).length(), (b - a).length()];
+    let magnitude = a.abs().max(b.abs()).max(c.abs()).max_element();
+    let tol = TIE_ULPS * f32::EPSILON * magnitude;
+    bary.iter().zip(opposite).any(|(&w, len)| w.abs() < TIE_BARYCENTRIC || w.abs() * area2 / len <= tol)
+}
+
+/// Classifies the closest hits `a` and `b` of one ray.
+pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict {
+    match (a, b) {
+        (None, None) => Verdict::Agree { rel_dt: None },
+        (Some(h), None) | (None, Some(h)) => {
+            if near_edge(mesh, &h) {
+                Verdict::EdgeTie
+            } else {
+                Verdict::HitMiss
+            }
+        }
+        (Some(ha), Some(hb)) => {
+            let scale = ha.t.abs().max(hb.t.abs()) as f64;
+            let dt = (ha.t as f64 - hb.t as f64).abs();
+            if ha.prim == hb.prim {
+                Verdict::Agree { rel_dt: Some(if scale > 0.0 { dt / scale } else { 0.0 }) }
+            } else if dt <= (TIE_ULPS * f32::EPSILON) as f64 * scale
+                || near_edge(mesh, &ha)
+                || near_edge(mesh, &hb)
+            {
+                Verdict::EdgeTie
+            } else {
+                Verdict::Primitive
+            }
+        }
+    }
+}
+
+/// Casts `rays` through `a` and `b` (closest hit and occlusion) in parallel and counts the
+/// differences. The result does not depend on the thread count.
+pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &TriangleMesh) -> AgreeReport {
+    let empty = || [KindReport::default(); 5];
+    let per = rays
+        .par_iter()
+        .fold(empty, |mut acc, (kind, ray)| {
+            let r = &mut acc[*kind as usize];
+            r.rays += 1;
+            match classify(mesh, a.intersect(ray), b.intersect(ray)) {
+                Verdict::Agree { rel_dt } => r.max_rel_dt = r.max_rel_dt.max(rel_dt.unwrap_or(0.0)),
+                Verdict::HitMiss => r.hit_miss_disagreements += 1,
+                Verdict::Primitive => r.primitive_disagreements += 1,
+                Verdict::EdgeTie => r.edge_ties += 1,
+            }
+            r.occlusion_disagreements += u64::from(a.occluded(ray) != b.occluded(ray));
+            acc
+        })
+        .reduce(empty, |x, y| std::array::from_fn(|k| x[k].merge(y[k])));
+    let total = per.iter().fold(KindReport::default(), |t, k| t.merge(*k));
+    AgreeReport {
+        backends: vec![a.name().to_string(), b.name().to_string()],
+        rays: total.rays,
+        hit_miss_disagreements: total.hit_miss_disagreements,
+        edge_ties: total.edge_ties,
+        primitive_disagreements: total.primitive_disagreements,
+        occlusion_disagreements: total.occlusion_disagreements,
+        max_rel_dt: total.max_rel_dt,
+        per_kind: RayKind::ALL.into_iter().zip(per).filter(|(_, r)| r.rays > 0).collect(),
+    }
+}
+
+/// [`compare`] of `a` with `b`, and with the brute-force `reference` of each when given
+/// (`[a-b]` or `[a-b, a-reference, b-reference]`).
+pub fn compare_with_reference(
+    a: &dyn Accel,
+    b: &dyn Accel,
+    reference: Option<&dyn Accel>,
+    rays: &[(RayKind, Ray)],
+    mesh: &TriangleMesh,
+) -> Vec<AgreeReport> {
+    let mut out = vec![compare(a, b, rays, mesh)];
+    if let Some(r) = reference {
+        out.push(compare(a, r, rays, mesh));
+        out.push(compare(b, r, rays, mesh));
+    }
+    out
+}
+
+impl AgreeReport {
+    /// No disagreement beyond edge ties (occlusion included).
+    pub fn clean(&self) -> bool {
+        self.hit_miss_disagreements == 0
+            && self.primitive_disagreements == 0
+            && self.occlusion_disagreements == 0
+    }
+}
+
+impl fmt::Display for AgreeReport {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "agreement: {} ({} rays)", self.backends.join(" vs "), self.rays)?;
+        writeln!(
+            f,
+            "{:<8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>11}",
+            "kind", "rays", "hit/miss", "prim", "ties", "occluded", "max rel dt"
+        )?;
+        let row = |f: &mut fmt::Formatter<'_>, name: &str, r: &KindReport| {
+            writeln!(
+                f,
+                "{:<8} {:>10} {:>9} {:>9} {:>9} {:>9} {:>11.3e}",
+                name,
+                r.rays,
+                r.hit_miss_disagreements,
+                r.primitive_disagreements,
+                r.edge_ties,
+                r.occlusion_disagreements,
+                r.max_rel_dt
+            )
+        };
+        for (k, r) in &self.per_kind {
+            row(f, k.name(), r)?;
+        }
+        let total = KindReport {
+            rays: self.rays,
+            hit_miss_disagreements: self.hit_miss_disagreements,
+            edge_ties: self.edge_ties,
+            primitive_disagreements: self.primitive_disagreements,
+            occlusion_disagreements: self.occlusion_disagreements,
+            max_rel_dt: self.max_rel_dt,
+        };
+        row(f, "total", &total)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::naive::Naive;
+
+    fn tri(scale: f32) -> TriangleMesh {
+        TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X * scale, Vec3::Y * scale, Vec3::X * 2.0 * scale],
+            indices: vec![[0, 1, 2], [0, 1, 3]],
+        }
+    }
+
+    fn hit(prim: u32, t: f32, u: f32, v: f32) -> Hit {
+        Hit { t, prim, u, v }
+    }
+
+    #[test]
+    fn near_edge_interior_edges_vertices_and_degenerate() {
+        for s in [1e-3, 1.0, 1e4] {
+            let m = tri(s);
+            assert!(!near_edge(&m, &hit(0, 1.0, 0.3, 0.3)), "centre at scale {s}");
+            assert!(!near_edge(&m, &hit(0, 1.0, 0.01, 0.5)), "1% from an edge at scale {s}");
+            assert!(near_edge(&m, &hit(0, 1.0, 0.5, 0.5)), "hypotenuse at scale {s}");
+            assert!(near_edge(&m, &hit(0, 1.0, 0.0, 0.4)), "edge u = 0 at scale {s}");
+            assert!(near_edge(&m, &hit(0, 1.0, 3e-6, 0.4)), "within 1e-5 at scale {s}");
+            assert!(near_edge(&m, &hit(0, 1.0, 1.0, 0.0)), "vertex at scale {s}");
+            assert!(near_edge(&m, &hit(1, 1.0, 0.3, 0.3)), "degenerate at scale {s}");
+        }
+        // Far from the origin, a few ULPs of the coordinates is more than 1e-5 of a small triangle.
+        let mut m = tri(1.0);
+        m.positions.iter_mut().for_each(|p| *p += Vec3::splat(1e4));
+        assert!(near_edge(&m, &hit(0, 1.0, 1e-4, 0.4)));
+        assert!(!near_edge(&m, &hit(0, 1.0, 0.2, 0.4)));
+    }
+
+    #[test]
+    fn classify_verdicts() {
+        let m = tri(1.0);
+        let inner = hit(0, 2.0, 0.3, 0.3);
+        assert_eq!(classify(&m, None, None), Verdict::Agree { rel_dt: None });
+        assert_eq!(classify(&m, Some(inner), None), Verdict::HitMiss);
+        assert_eq!(classify(&m, None, Some(hit(0, 2.0, 0.5, 0.5))), Verdict::EdgeTie);
+        assert_eq!(
+            classify(&m, Some(inner), Some(hit(0, 2.0, 0.3, 0.3))),
+            Verdict::Agree { rel_dt: Some(0.0) }
+        );
+        let other = TriangleMesh {
+            positions: [
+                m.positions.clone(),
+                vec![Vec3::Z, Vec3::new(1.0, 0.0, 1.0), Vec3::new(0.0, 1.0, 1.0)],
+            ]
+            .concat(),
+            indices: vec![[0, 1, 2], [0, 1, 3], [4, 5, 6]],
+        };
+        assert_eq!(classify(&other, Some(inner), Some(hit(2, 3.0, 0.3, 0.3))), Verdict::Primitive);
+        // Same distance, different triangles (coplanar overlap): a tie.
+        assert_eq!(classify(&other, Some(inner), Some(hit(2, 2.0, 0.3, 0.3))), Verdict::EdgeTie);
+    }
+
+    #[test]
+    fn rays_are_deterministic_finite_and_mixed() {
+        let m = tri(1.0);
+        let a = generate_rays(&m, None, 1003, 7);
+        assert_eq!(a, generate_rays(&m, None, 1003, 7));
+        assert_ne!(a, generate_rays(&m, None, 1003, 8));
+        assert_eq!(a.len(), 1003);
+        for kind in RayKind::ALL {
+            assert!(a.iter().filter(|(k, _)| *k == kind).count() >= 200);
+        }
+        for (kind, r) in &a {
+            assert!(r.origin.is_finite() && r.dir.is_finite() && r.dir != Vec3::ZERO, "{kind:?}");
+            if *kind == RayKind::Shadow {
+                assert!(r.t_max < 1.0);
+            }
+        }
+        let naive = Naive::new(&m);
+        let report = compare(&naive, &naive, &a, &m);
+        assert!(report.clean() && report.edge_ties == 0, "{report}");
+        let json = serde_json::to_value(&report).unwrap();
+        for key in ["rays", "hit_miss_disagreements", "edge_ties", "primitive_disagreements"] {
+            assert!(json.get(key).is_some(), "{key}");
+        }
+        assert!(json["per_kind"]["camera"]["rays"].as_u64().unwrap() > 0);
+        // Empty meshes still get rays (random ones).
+        assert_eq!(generate_rays(&TriangleMesh::default(), None, 10, 1).len(), 10);
+    }
+}
