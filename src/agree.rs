@@ -244,7 +244,9 @@ pub struct AgreeReport {
     /// One backend hit, the other missed, and the hit is not within rounding of an edge.
     pub hit_miss_disagreements: u64,
     /// Differences (hit/miss or primitive) explained by a hit within [`TIE_ULPS`] ULPs (or
-    /// [`TIE_BARYCENTRIC`]) of an edge or vertex, or by two triangles at the same distance.
+    /// [`TIE_BARYCENTRIC`]) of an edge or vertex, or by two triangles hit at the same point up
+    /// to rounding (same distance, or coplanar and touching surfaces such as a block standing
+    /// on the floor).
     pub edge_ties: u64,
     /// Both hit, different triangles, not a tie.
     pub primitive_disagreements: u64,
@@ -287,6 +289,15 @@ pub fn near_edge(mesh: &TriangleMesh, hit: &Hit) -> bool {
     bary.iter().zip(opposite).any(|(&w, len)| w.abs() < TIE_BARYCENTRIC || w.abs() * area2 / len <= tol)
 }
 
+/// Whether two hits on different triangles are the same point up to rounding of the world
+/// coordinates (coplanar or touching surfaces: either answer is right).
+fn same_point(mesh: &TriangleMesh, a: &Hit, b: &Hit) -> bool {
+    let pa = mesh.point(a.prim, a.u, a.v);
+    let pb = mesh.point(b.prim, b.u, b.v);
+    let magnitude = pa.abs().max(pb.abs()).max_element();
+    (pa - pb).length() <= TIE_ULPS * f32::EPSILON * magnitude
+}
+
 /// Classifies the closest hits `a` and `b` of one ray.
 pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict {
     match (a, b) {
@@ -304,6 +315,7 @@ pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict 
             if ha.prim == hb.prim {
                 Verdict::Agree { rel_dt: Some(if scale > 0.0 { dt / scale } else { 0.0 }) }
             } else if dt <= (TIE_ULPS * f32::EPSILON) as f64 * scale
+                || same_point(mesh, &ha, &hb)
                 || near_edge(mesh, &ha)
                 || near_edge(mesh, &hb)
             {
@@ -406,6 +418,73 @@ impl fmt::Display for AgreeReport {
             max_rel_dt: self.max_rel_dt,
         };
         row(f, "total", &total)
+    }
+}
+
+/// Brute force joins the comparison up to this many triangles × rays.
+pub const NAIVE_BUDGET: u64 = 400_000_000;
+
+/// The agreement of a scene's backends: the main pair (Embree vs BVH when built with Embree,
+/// else BVH vs brute force) at the top level, and each against brute force when the scene is
+/// small enough.
+#[derive(Clone, Debug, Serialize)]
+pub struct SceneAgreement {
+    #[serde(flatten)]
+    pub main: AgreeReport,
+    /// The backends against brute force (empty when the scene is too large for it).
+    pub against_naive: Vec<AgreeReport>,
+}
+
+impl SceneAgreement {
+    /// No disagreement beyond edge ties, in any comparison.
+    pub fn clean(&self) -> bool {
+        self.main.clean() && self.against_naive.iter().all(AgreeReport::clean)
+    }
+}
+
+impl fmt::Display for SceneAgreement {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.main)?;
+        for r in &self.against_naive {
+            write!(f, "\n{r}")?;
+        }
+        Ok(())
+    }
+}
+
+/// Casts `n` rays of every kind through the backends built for `scene` (camera rays from its
+/// camera) and compares them.
+pub fn agree_scene(
+    scene: &crate::scene::Scene,
+    n: usize,
+    seed: u64,
+    options: crate::accel::AccelOptions,
+) -> Result<SceneAgreement, crate::accel::AccelError> {
+    use crate::accel::{bvh::Bvh, naive::Naive};
+    let mesh = &scene.mesh;
+    mesh.validate()?;
+    let eye = scene.camera.eye;
+    let camera = CameraLike { eye, target: eye + scene.camera.forward };
+    let rays = generate_rays(mesh, Some(camera), n, seed);
+    let bvh = Bvh::build(mesh);
+    let naive_ok = mesh.len() as u64 * rays.len() as u64 <= NAIVE_BUDGET;
+    let naive = naive_ok.then(|| Naive::new(mesh));
+    #[cfg(feature = "embree")]
+    {
+        let embree = crate::accel::embree::EmbreeAccel::build(mesh, options)?;
+        let mut reports =
+            compare_with_reference(&embree, &bvh, naive.as_ref().map(|n| n as &dyn Accel), &rays, mesh);
+        let main = reports.remove(0);
+        Ok(SceneAgreement { main, against_naive: reports })
+    }
+    #[cfg(not(feature = "embree"))]
+    {
+        let _ = options;
+        let main = match &naive {
+            Some(n) => compare(&bvh, n, &rays, mesh),
+            None => compare(&bvh, &bvh, &rays, mesh),
+        };
+        Ok(SceneAgreement { main, against_naive: Vec::new() })
     }
 }
 

@@ -20,6 +20,19 @@ pub enum Command {
     /// Cast the same rays through Embree, the BVH (and brute force on small scenes) and report
     /// how often they disagree.
     Agree(AgreeArgs),
+    /// Compare two EXR images: RMSE and relative MSE over all pixels and channels, means.
+    Compare {
+        /// The image to judge.
+        image: PathBuf,
+        /// The reference.
+        reference: PathBuf,
+        /// Box-downsample the reference by this factor first (when the image is smaller).
+        #[arg(long)]
+        downsample: Option<usize>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Print what a scene holds: triangles, materials, lights, bounds.
     Info {
         /// Scene file (TOML).
@@ -110,6 +123,10 @@ pub struct SettingsArgs {
     /// Shadow-ray samples per shading point [default: 1].
     #[arg(long)]
     pub light_samples: Option<u32>,
+    /// Precompute irradiance at photon positions and read it at diffuse surfaces instead of
+    /// gathering photons there (Christensen 1999) [default: true].
+    #[arg(long)]
+    pub irradiance_cache: Option<bool>,
 }
 
 impl SettingsArgs {
@@ -132,6 +149,7 @@ impl SettingsArgs {
             kernel: self.kernel,
             light_samples: self.light_samples,
             robust: self.robust,
+            irradiance_cache: self.irradiance_cache,
         }
     }
 }
@@ -140,7 +158,7 @@ impl SettingsArgs {
 pub struct AgreeArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
-    /// Rays of each kind.
+    /// Rays in all, split evenly among the kinds (camera, random, surface, grazing, shadow).
     #[arg(long, default_value_t = 100_000)]
     pub rays: usize,
     /// Random seed.

@@ -55,6 +55,7 @@ pub struct RenderSettings {
     pub kernel: Option<Kernel>,
     pub light_samples: Option<u32>,
     pub robust: Option<bool>,
+    pub irradiance_cache: Option<bool>,
 }
 
 impl RenderSettings {
@@ -80,7 +81,8 @@ impl RenderSettings {
             color,
             kernel,
             light_samples,
-            robust
+            robust,
+            irradiance_cache
         )
     }
 }
@@ -112,6 +114,8 @@ pub struct RenderConfig {
     pub color: ColorMode,
     pub kernel: Kernel,
     pub light_samples: u32,
+    /// Precompute irradiance at photon positions for diffuse lookups (Christensen 1999).
+    pub irradiance_cache: bool,
 }
 
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
@@ -154,6 +158,7 @@ impl RenderSettings {
             color: self.color.unwrap_or(ColorMode::PerChannel),
             kernel: self.kernel.unwrap_or(Kernel::Cone),
             light_samples: self.light_samples.unwrap_or(1),
+            irradiance_cache: self.irradiance_cache.unwrap_or(true),
         };
         c.validate()?;
         Ok(c)

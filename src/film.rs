@@ -46,7 +46,10 @@ impl Film {
 
     /// Box-downsamples by an integer `factor` (each output pixel is the mean of a block).
     pub fn downsample(&self, factor: usize) -> Film {
-        assert!(factor >= 1 && self.width % factor == 0 && self.height % factor == 0, "factor must divide the size");
+        assert!(
+            factor >= 1 && self.width % factor == 0 && self.height % factor == 0,
+            "factor must divide the size"
+        );
         let (w, h) = (self.width / factor, self.height / factor);
         let mut out = Film::new(w, h);
         for y in 0..h {
@@ -80,7 +83,8 @@ impl Film {
         let bytes: Vec<u8> = self.pixels.iter().flat_map(|p| p.to_array().map(srgb8)).collect();
         atomic_write(path, |tmp| {
             let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
-            let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width as u32, self.height as u32);
+            let mut enc =
+                png::Encoder::new(std::io::BufWriter::new(file), self.width as u32, self.height as u32);
             enc.set_color(png::ColorType::Rgb);
             enc.set_depth(png::BitDepth::Eight);
             let mut w = enc.write_header().map_err(|e| e.to_string())?;
@@ -114,10 +118,9 @@ fn srgb8(v: f32) -> u8 {
 /// Runs `write` on a temporary path in the target's directory, then renames it over `path`.
 /// On failure the temporary file is removed and `path` is left untouched.
 fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) -> Result<(), ImageError> {
-    let name = path.file_name().ok_or_else(|| ImageError::Format {
-        path: path.to_owned(),
-        message: "not a file name".into(),
-    })?;
+    let name = path
+        .file_name()
+        .ok_or_else(|| ImageError::Format { path: path.to_owned(), message: "not a file name".into() })?;
     let mut tmp_name = std::ffi::OsString::from(".");
     tmp_name.push(name);
     tmp_name.push(format!(".{}.tmp", std::process::id()));

@@ -7,6 +7,8 @@
 //!
 //! All `unsafe` code lives in `accel::embree`; everything else is safe Rust.
 #![deny(unsafe_code)]
+// `!(x > 0.0)` is how this crate rejects NaN along with the out-of-range values; keep it.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
 pub mod agree;

@@ -19,6 +19,9 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Agree(args) => agree(args),
         Command::Info { scene } => info(&scene),
+        Command::Compare { image, reference, downsample, json } => {
+            compare(&image, &reference, downsample, json)
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -47,7 +50,9 @@ fn render(args: cli::RenderArgs) -> Result<()> {
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
-    let cfg = settings.resolve(width, height).with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
+    let cfg = settings
+        .resolve(width, height)
+        .with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
     for out in [Some(&args.output), args.png.as_ref(), args.stats.as_ref()].into_iter().flatten() {
         let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
         if !dir.is_dir() {
@@ -74,7 +79,8 @@ fn render(args: cli::RenderArgs) -> Result<()> {
     stats.wall_seconds = wall.elapsed().as_secs_f64();
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&stats)?;
-        std::fs::write(path, json).with_context(|| format!("{}: could not write the stats", path.display()))?;
+        std::fs::write(path, json)
+            .with_context(|| format!("{}: could not write the stats", path.display()))?;
     }
     if !args.quiet {
         eprintln!(
@@ -103,6 +109,44 @@ fn agree(args: cli::AgreeArgs) -> Result<()> {
     Ok(())
 }
 
+fn compare(
+    image: &std::path::Path,
+    reference: &std::path::Path,
+    downsample: Option<usize>,
+    json: bool,
+) -> Result<()> {
+    use photonmap::film::Film;
+    let a = Film::read_exr(image)?;
+    let mut b = Film::read_exr(reference)?;
+    if let Some(f) = downsample {
+        if f == 0 || b.width % f != 0 || b.height % f != 0 {
+            bail!("--downsample {f} does not divide the reference's {}x{}", b.width, b.height);
+        }
+        b = b.downsample(f);
+    }
+    let Some((rmse, rel_mse)) = photonmap::film::compare(&a, &b) else {
+        bail!(
+            "{} is {}x{} but {} is {}x{}",
+            image.display(),
+            a.width,
+            a.height,
+            reference.display(),
+            b.width,
+            b.height
+        );
+    };
+    let (ma, mb) = (a.mean(), b.mean());
+    let nonfinite = a.nonfinite_count();
+    if json {
+        let v = serde_json::json!({"rmse": rmse, "rel_mse": rel_mse, "mean": ma, "reference_mean": mb,
+            "bias": ma / mb - 1.0, "nonfinite_pixels": nonfinite});
+        println!("{v}");
+    } else {
+        println!("rmse {rmse:.5}  rel_mse {rel_mse:.5}  mean {ma:.5} vs {mb:.5} ({:+.2}%)  non-finite pixels {nonfinite}", 100.0 * (ma / mb - 1.0));
+    }
+    Ok(())
+}
+
 fn info(path: &std::path::Path) -> Result<()> {
     let scene = Scene::load(path)?;
     let b = scene.bounds();
@@ -110,7 +154,12 @@ fn info(path: &std::path::Path) -> Result<()> {
     println!("triangles  {}", scene.mesh.len());
     println!("vertices   {}", scene.mesh.positions.len());
     println!("bounds     {:?} .. {:?}", b.min.to_array(), b.max.to_array());
-    println!("camera     {}x{}, eye {:?}", scene.camera.width, scene.camera.height, scene.camera.eye.to_array());
+    println!(
+        "camera     {}x{}, eye {:?}",
+        scene.camera.width,
+        scene.camera.height,
+        scene.camera.eye.to_array()
+    );
     for (name, m) in scene.material_names.iter().zip(&scene.materials) {
         let count = scene.tri_material.iter().filter(|&&i| scene.materials[i as usize] == *m).count();
         println!("material   {name}: {m:?} ({count} triangles)");

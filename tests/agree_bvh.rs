@@ -146,7 +146,7 @@ fn agrees_on_slivers_and_degenerates() {
         if m.normal(i).is_none() {
             let [a, _, c] = m.triangle(i);
             let ray = Ray::new(a.lerp(c, 0.3) + Vec3::Z, -Vec3::Z);
-            assert!(bvh.intersect(&ray).map_or(true, |h| m.normal(h.prim).is_some()));
+            assert!(bvh.intersect(&ray).is_none_or(|h| m.normal(h.prim).is_some()));
         }
     }
 }
@@ -164,7 +164,7 @@ fn assert_watertight(name: &str, mesh: &TriangleMesh, inside: impl Fn(&mut Pcg64
             let r = (1.0 - z * z).max(0.0).sqrt();
             let ray = Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z));
             let hit = bvh.intersect(&ray);
-            assert!(hit.map_or(true, |h| h.t.is_finite() && h.u.is_finite() && h.v.is_finite()));
+            assert!(hit.is_none_or(|h| h.t.is_finite() && h.u.is_finite() && h.v.is_finite()));
             usize::from(hit.is_none() || !bvh.occluded(&ray))
         })
         .sum();

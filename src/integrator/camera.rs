@@ -131,22 +131,39 @@ impl<A: Accel> Shared<'_, A> {
         }
         if !self.maps.indirect.is_empty() {
             l += match self.cfg.indirect {
-                IndirectMode::Estimate => {
-                    c.queries += self.maps.indirect.len() as u64;
-                    PhotonMaps::radiance(
-                        &self.maps.indirect,
-                        hit.p,
-                        hit.n,
-                        wo,
-                        m,
-                        &self.gather,
-                        &mut scratch.neighbors,
-                    )
-                }
+                IndirectMode::Estimate => match self.cached_irradiance(hit, wo, m, scratch, c) {
+                    Some((e, _)) => e,
+                    None => {
+                        c.queries += self.maps.indirect.len() as u64;
+                        let (maps, g) = (&self.maps.indirect, &self.gather);
+                        PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, &mut scratch.neighbors)
+                    }
+                },
                 IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
             };
         }
         l
+    }
+
+    /// Reflected radiance `(indirect, caustic)` at a Lambertian surface from the precomputed
+    /// irradiance, or `None` (not Lambertian, no cache, or no site near enough).
+    #[inline]
+    fn cached_irradiance(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Option<(Vec3, Vec3)> {
+        let kd = m.lambertian()?;
+        if self.cache.is_empty() {
+            return None;
+        }
+        c.queries += 1;
+        let (e_ind, e_caus) = self.cache.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.neighbors)?;
+        let f = kd * std::f32::consts::FRAC_1_PI;
+        Some((f * e_ind, f * e_caus))
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
@@ -183,25 +200,15 @@ impl<A: Accel> Shared<'_, A> {
                     continue;
                 }
                 let mut ly = direct_light(self, &y, wy, my, 1, rng, c);
-                c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
-                ly += PhotonMaps::radiance(
-                    &self.maps.caustic,
-                    y.p,
-                    y.n,
-                    wy,
-                    my,
-                    &self.caustic_gather,
-                    &mut scratch.neighbors,
-                );
-                ly += PhotonMaps::radiance(
-                    &self.maps.indirect,
-                    y.p,
-                    y.n,
-                    wy,
-                    my,
-                    &self.gather,
-                    &mut scratch.neighbors,
-                );
+                if let Some((e_ind, e_caus)) = self.cached_irradiance(&y, wy, my, scratch, c) {
+                    ly += e_ind + e_caus;
+                } else {
+                    c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
+                    let nb = &mut scratch.neighbors;
+                    ly +=
+                        PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &self.caustic_gather, nb);
+                    ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &self.gather, nb);
+                }
                 sum += beta * ly;
                 break;
             }

@@ -9,6 +9,7 @@ pub mod lights;
 use crate::accel::Accel;
 use crate::config::{ColorMode, RenderConfig};
 use crate::film::Film;
+use crate::photon::irradiance::{self, IrradianceCache};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
 use crate::photon::trace::{self, Pass};
 use crate::scene::{Camera, Scene};
@@ -30,6 +31,8 @@ pub struct Shared<'a, A: Accel> {
     pub cfg: &'a RenderConfig,
     pub gather: GatherParams,
     pub caustic_gather: GatherParams,
+    /// Precomputed irradiance (empty when disabled or when there is no indirect map).
+    pub cache: &'a IrradianceCache,
 }
 
 /// Per-thread counters, summed at the end (no atomics in hot loops).
@@ -57,6 +60,9 @@ pub trait Progress: Sync {
     /// The stage is over.
     fn finish(&self) {}
 }
+
+/// Irradiance is precomputed at every this-many-th indirect photon (Christensen uses 4).
+const IRRADIANCE_STRIDE: usize = 4;
 
 /// Progress that reports nothing.
 pub struct Quiet;
@@ -109,6 +115,20 @@ pub fn render<A: Accel>(
     let (_, radius) = scene.bounds().bounding_sphere();
     let lit = analysis.light_power.max_element() > 0.0;
     let mut maps = PhotonMaps::default();
+    let mut sites = Vec::new();
+    let auto_radius = 0.1 * radius;
+    let gather = GatherParams {
+        k: cfg.gather_photons as usize,
+        max_radius: cfg.gather_radius.unwrap_or(auto_radius),
+        kernel: cfg.kernel,
+        flatten: 8.0,
+    };
+    let caustic_gather = GatherParams {
+        k: cfg.caustic_gather_photons as usize,
+        max_radius: cfg.caustic_gather_radius.unwrap_or(0.25 * auto_radius),
+        kernel: cfg.kernel,
+        flatten: 8.0,
+    };
 
     // Indirect map.
     let why_not_indirect = if !lit {
@@ -137,6 +157,9 @@ pub fn render<A: Accel>(
             });
             progress.finish();
             stats.rays.photon += out.rays;
+            if cfg.irradiance_cache {
+                sites = irradiance::pick_sites(&out.maps, IRRADIANCE_STRIDE);
+            }
             maps.indirect =
                 stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
             record_maps(&mut stats, "indirect", &maps.indirect);
@@ -191,6 +214,22 @@ pub fn render<A: Accel>(
             }
         }
     }
+    let cache = if sites.is_empty() {
+        let why =
+            if cfg.irradiance_cache { "no indirect photons" } else { "disabled (--irradiance-cache false)" };
+        stats.skip("irradiance", why);
+        IrradianceCache::default()
+    } else {
+        let reason = format!("{} sites, every {IRRADIANCE_STRIDE}th photon", sites.len());
+        let cache = stats.run("irradiance", reason, |_| {
+            IrradianceCache::build(sites, &maps.indirect, &maps.caustic, &gather, &caustic_gather)
+        });
+        stats.photons.insert(
+            "irradiance_cache".into(),
+            MapStats { emitted: 0, stored: cache.len() as u64, bytes: cache.bytes() as u64 },
+        );
+        cache
+    };
     let photon_seconds = stats.seconds("photons.indirect") + stats.seconds("photons.caustic");
     if photon_seconds > 0.0 {
         let paths: u64 = stats.photons.values().map(|m| m.emitted).sum();
@@ -198,19 +237,6 @@ pub fn render<A: Accel>(
     }
 
     // Camera pass.
-    let auto_radius = 0.1 * radius;
-    let gather = GatherParams {
-        k: cfg.gather_photons as usize,
-        max_radius: cfg.gather_radius.unwrap_or(auto_radius),
-        kernel: cfg.kernel,
-        flatten: 8.0,
-    };
-    let caustic_gather = GatherParams {
-        k: cfg.caustic_gather_photons as usize,
-        max_radius: cfg.caustic_gather_radius.unwrap_or(0.25 * auto_radius),
-        kernel: cfg.kernel,
-        flatten: 8.0,
-    };
     let shared = Shared {
         scene,
         scene_camera: scene.camera.with_resolution(cfg.width, cfg.height),
@@ -220,6 +246,7 @@ pub fn render<A: Accel>(
         cfg,
         gather,
         caustic_gather,
+        cache: &cache,
     };
     progress.start("camera", cfg.height as u64);
     let (film, counters) = stats.run("camera", "always", |_| camera_pass(&shared, progress));

@@ -145,6 +145,16 @@ impl Material {
         matches!(self, Material::Mirror { .. } | Material::Glass { .. })
     }
 
+    /// The albedo `kd` of a purely Lambertian surface (diffuse, or an emitter's reflection),
+    /// whose BRDF is the constant `kd / pi`; `None` for any other kind.
+    #[inline]
+    pub fn lambertian(&self) -> Option<Vec3> {
+        match *self {
+            Material::Diffuse { kd } | Material::Emissive { kd, .. } => Some(kd),
+            _ => None,
+        }
+    }
+
     /// Whether every lobe is a delta lobe (same as [`Material::is_specular`] for these kinds).
     pub fn is_delta(&self) -> bool {
         self.is_specular()

@@ -41,6 +41,9 @@ impl KdPoint for Photon {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhotonHit {
     pub pos: Vec3,
+    /// Unit surface normal on the side the photon arrived from (not stored in the map; used to
+    /// place precomputed irradiance).
+    pub n: Vec3,
     /// Unit direction back toward where the photon came from.
     pub wi: Vec3,
     pub power: Vec3,
@@ -78,17 +81,18 @@ pub struct PhotonMap {
 impl PhotonMap {
     /// Packs `hits` and builds the kd-tree (in parallel).
     pub fn build(hits: Vec<PhotonHit>, color: MapColor, emitted: u64) -> Self {
-        let photons = hits
-            .into_iter()
-            .map(|h| Photon {
-                pos: h.pos.to_array(),
-                dir: pack::encode_dir_oct(h.wi),
-                power: match color {
-                    MapColor::Rgb => pack::rgb9e5_encode(h.power),
-                    MapColor::Channel(c) => h.power[c].to_bits(),
-                },
-            })
-            .collect();
+        // A fresh exact-size buffer: collecting in place would keep the larger allocation of
+        // `hits` alive for the life of the map.
+        let mut photons = Vec::with_capacity(hits.len());
+        photons.extend(hits.iter().map(|h| Photon {
+            pos: h.pos.to_array(),
+            dir: pack::encode_dir_oct(h.wi),
+            power: match color {
+                MapColor::Rgb => pack::rgb9e5_encode(h.power),
+                MapColor::Channel(c) => h.power[c].to_bits(),
+            },
+        }));
+        drop(hits);
         PhotonMap { tree: KdTree::build(photons), color: Some(color), emitted }
     }
 
@@ -134,6 +138,10 @@ impl PhotonMap {
             return Vec3::ZERO;
         }
         let ns = face_forward(n, wo);
+        if let Some(kd) = m.lambertian() {
+            // Constant BRDF: the estimate is irradiance times kd / pi.
+            return self.irradiance(x, ns, params, scratch) * kd * std::f32::consts::FRAC_1_PI;
+        }
         self.tree.knn_with(x, params.k, params.max_radius, flattened_metric(ns, params.flatten), scratch);
         if scratch.is_empty() {
             return Vec3::ZERO;
@@ -152,7 +160,7 @@ impl PhotonMap {
             if wi.dot(ns) <= 0.0 {
                 continue; // arrived from behind this surface
             }
-            let w = kernel_weight(params.kernel, nb.dist2 / r2, params.k);
+            let w = kernel_weight(params.kernel, nb.dist2 / r2);
             sum += w * m.eval(n, wo, wi) * self.power(p);
         }
         sum / (PI * r2)
@@ -177,7 +185,7 @@ impl PhotonMap {
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
             if pack::decode_dir_oct(p.dir).dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 / r2, params.k) * self.power(p);
+                sum += kernel_weight(params.kernel, nb.dist2 / r2) * self.power(p);
             }
         }
         sum / (PI * r2)
@@ -187,6 +195,7 @@ impl PhotonMap {
     pub fn photons(&self) -> impl Iterator<Item = PhotonHit> + '_ {
         self.tree.items().iter().map(|p| PhotonHit {
             pos: p.position(),
+            n: Vec3::ZERO,
             wi: pack::decode_dir_oct(p.dir),
             power: self.power(p),
         })
@@ -194,18 +203,21 @@ impl PhotonMap {
 }
 
 /// Kernel weight at squared normalised distance `t2 = d^2 / r^2`, normalised so that the
-/// weights integrate to 1 over the disc of area `pi r^2` (Jensen 2001, 7.2.1):
-/// box 1; cone `(1 - d/r) / (1 - 2/3)`; Gaussian (Pavicic) `a (1 - (1 - e^(-b t2/2)) / (1 - e^-b))`
-/// with `a = 0.918`, `b = 1.953`.
+/// weights integrate to 1 over the disc of area `pi r^2` (Jensen 2001, 7.2.1): box 1; cone
+/// `(1 - d/r) / (1 - 2/3)`; Gaussian (Pavicic 1990) `a (1 - (1 - e^(-b t2/2)) / (1 - e^-b))`
+/// with `a = 0.918`, `b = 1.953`, divided by its mean over the disc,
+/// `a (1 - (1 - (2/b)(1 - e^(-b/2))) / (1 - e^-b)) = 0.53115` (Jensen's constants alone give
+/// the shape, not unit integral: used as printed they darken the estimate by 47 %).
 #[inline]
-pub fn kernel_weight(kernel: Kernel, t2: f32, _k: usize) -> f32 {
+pub fn kernel_weight(kernel: Kernel, t2: f32) -> f32 {
     match kernel {
         Kernel::Box => 1.0,
         Kernel::Cone => 3.0 * (1.0 - t2.sqrt()).max(0.0),
         Kernel::Gaussian => {
             const A: f32 = 0.918;
             const B: f32 = 1.953;
-            A * (1.0 - (1.0 - (-B * 0.5 * t2).exp()) / (1.0 - (-B).exp()))
+            const MEAN: f32 = 0.531_154_9;
+            (A / MEAN) * (1.0 - (1.0 - (-B * 0.5 * t2).exp()) / (1.0 - (-B).exp()))
         }
     }
 }
@@ -244,11 +256,10 @@ mod tests {
             let mut integral = 0.0f64;
             for i in 0..n {
                 let r = (i as f64 + 0.5) / n as f64;
-                integral += kernel_weight(kernel, (r * r) as f32, 50) as f64 * 2.0 * std::f64::consts::PI * r
+                integral += kernel_weight(kernel, (r * r) as f32) as f64 * 2.0 * std::f64::consts::PI * r
                     / n as f64;
             }
             let expect = std::f64::consts::PI;
-            // Jensen's Gaussian constants are normalised to about 0.5 %.
             assert!((integral - expect).abs() / expect < 0.01, "{kernel:?}: {integral}");
         }
     }
@@ -264,6 +275,7 @@ mod tests {
         let hits = (0..n)
             .map(|_| PhotonHit {
                 pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
+                n: Vec3::Y,
                 wi: Vec3::new(0.3, 0.9, 0.1).normalize(),
                 power: Vec3::splat(power_each),
             })

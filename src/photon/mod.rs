@@ -25,6 +25,7 @@
 //! (Putting the 2-bit axis in the record instead, e.g. 2×15-bit octahedral + 2 bits, would give
 //! exactly 20 B; not worth it, since the separate code array is tiny and stays in cache.)
 
+pub mod irradiance;
 pub mod kdtree;
 pub mod map;
 pub mod pack;

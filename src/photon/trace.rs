@@ -287,13 +287,13 @@ fn trace_photon<A: Accel>(
             match pass {
                 Pass::Caustic => {
                     if bounce > 0 && specular_only {
-                        out.push(PhotonHit { pos: p, wi: wo, power });
+                        out.push(PhotonHit { pos: p, n: face_forward(n, wo), wi: wo, power });
                     }
                     break;
                 }
                 Pass::Indirect => {
                     if !specular_only {
-                        out.push(PhotonHit { pos: p, wi: wo, power });
+                        out.push(PhotonHit { pos: p, n: face_forward(n, wo), wi: wo, power });
                     }
                 }
             }

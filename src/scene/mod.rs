@@ -165,6 +165,9 @@ fn transform(
     Ok(())
 }
 
+/// Per-triangle material indices, the materials, and their names.
+type Resolved = (Vec<u32>, Vec<Material>, Vec<String>);
+
 /// Resolves every triangle's material name to an index, merging MTL materials with the scene
 /// file's `[materials.NAME]` entries (the file wins, field by field).
 fn resolve_materials(
@@ -172,7 +175,7 @@ fn resolve_materials(
     tri_names: &[Option<String>],
     mtl: &HashMap<String, MtlMaterial>,
     file: &SceneFile,
-) -> Result<(Vec<u32>, Vec<Material>, Vec<String>), SceneError> {
+) -> Result<Resolved, SceneError> {
     let mut index: HashMap<Option<&str>, u32> = HashMap::new();
     let mut materials = Vec::new();
     let mut names = Vec::new();
@@ -231,7 +234,7 @@ fn material(
             }
             let ns =
                 e.ns.or(mtl.ns).ok_or_else(|| SceneError::field(path, field("ns"), "glossy needs ns"))?;
-            if !(ns.is_finite() && ns >= 0.0 && ns <= 1e6) {
+            if !(0.0..=1e6).contains(&ns) {
                 return Err(SceneError::field(path, field("ns"), format!("{ns} is not in [0, 1e6]")));
             }
             Material::Glossy { kd, ks, ns }

@@ -180,7 +180,7 @@ fn best_split(prims: &[PrimRef], bounds: &Box3, cbounds: &Box3) -> Option<(usize
                 continue;
             }
             let cost = b.half_area() * n as f32 + rc;
-            if best.map_or(true, |(_, _, c)| cost < c) {
+            if best.is_none_or(|(_, _, c)| cost < c) {
                 best = Some((a, i, cost));
             }
         }
