@@ -32,6 +32,12 @@ pub enum Command {
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
+        /// Write the absolute difference, scaled by this factor, as a PNG.
+        #[arg(long, value_name = "PNG")]
+        diff: Option<PathBuf>,
+        /// Scale of the difference image.
+        #[arg(long, default_value_t = 10.0)]
+        diff_scale: f32,
     },
     /// Print what a scene holds: triangles, materials, lights, bounds.
     Info {

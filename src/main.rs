@@ -19,8 +19,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Agree(args) => agree(args),
         Command::Info { scene } => info(&scene),
-        Command::Compare { image, reference, downsample, json } => {
-            compare(&image, &reference, downsample, json)
+        Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
+            compare(&image, &reference, downsample, json, diff.as_deref(), diff_scale)
         }
     };
     match result {
@@ -114,6 +114,8 @@ fn compare(
     reference: &std::path::Path,
     downsample: Option<usize>,
     json: bool,
+    diff: Option<&std::path::Path>,
+    diff_scale: f32,
 ) -> Result<()> {
     use photonmap::film::Film;
     let a = Film::read_exr(image)?;
@@ -135,6 +137,13 @@ fn compare(
             b.height
         );
     };
+    if let Some(path) = diff {
+        let mut d = a.clone();
+        for (p, q) in d.pixels.iter_mut().zip(&b.pixels) {
+            *p = (*p - *q).abs() * diff_scale;
+        }
+        d.write_png(path)?;
+    }
     let (ma, mb) = (a.mean(), b.mean());
     let nonfinite = a.nonfinite_count();
     if json {

@@ -1,6 +1,9 @@
-//! Direct light by shadow rays: lights chosen by power, `n` samples per shading point; for
-//! glossy surfaces one BSDF sample as well, combined with the light samples by multiple
-//! importance sampling (Veach 1997, power heuristic).
+//! Direct light by shadow rays: lights chosen by power, `n` samples per shading point, and
+//! when the scene has area lights one BSDF sample each as well, the two combined by multiple
+//! importance sampling (Veach 1997, power heuristic). Light sampling alone is poor where an
+//! emitter is close and large (the 1/d^2 of area sampling near a corner of the furnace) and
+//! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
+//! the two everywhere.
 
 use super::camera::SurfaceHit;
 use super::{Counters, Shared};
@@ -39,7 +42,7 @@ pub fn direct_light<A: Accel>(
     if s.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let glossy = matches!(m, Material::Glossy { .. });
+    let mis = s.lights.has_area();
     let mut sum = Vec3::ZERO;
     for _ in 0..n {
         // Light sampling.
@@ -47,7 +50,7 @@ pub fn direct_light<A: Accel>(
             let f = m.eval(hit.n, wo, ls.wi);
             if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, ls.wi, ls.dist, c) {
                 let cos = hit.n.dot(ls.wi).abs();
-                let w = if glossy && !ls.delta {
+                let w = if mis && !ls.delta {
                     power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi))
                 } else {
                     1.0
@@ -55,8 +58,8 @@ pub fn direct_light<A: Accel>(
                 sum += f * ls.li * (cos * w / ls.pdf);
             }
         }
-        // BSDF sampling toward area lights, for glossy lobes that light sampling covers badly.
-        if glossy {
+        // BSDF sampling toward area lights.
+        if mis {
             let Some(bs) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
             if bs.delta || bs.pdf <= 0.0 {
                 continue;

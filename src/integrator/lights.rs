@@ -60,6 +60,11 @@ impl LightSet {
         self.select.total() <= 0.0
     }
 
+    /// Whether some triangles emit (so BSDF-sampled rays can find light).
+    pub fn has_area(&self) -> bool {
+        self.area.is_some()
+    }
+
     pub fn lights(&self) -> &[Light] {
         &self.lights
     }

@@ -256,8 +256,8 @@ mod tests {
             let mut integral = 0.0f64;
             for i in 0..n {
                 let r = (i as f64 + 0.5) / n as f64;
-                integral += kernel_weight(kernel, (r * r) as f32) as f64 * 2.0 * std::f64::consts::PI * r
-                    / n as f64;
+                integral +=
+                    kernel_weight(kernel, (r * r) as f32) as f64 * 2.0 * std::f64::consts::PI * r / n as f64;
             }
             let expect = std::f64::consts::PI;
             assert!((integral - expect).abs() / expect < 0.01, "{kernel:?}: {integral}");
