@@ -6,8 +6,8 @@ mod progress;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use cli::{Cli, Command};
-use photonmap::accel::{AccelOptions, AnyAccel};
-use photonmap::integrator::{self, Progress};
+use photonmap::accel::AccelOptions;
+use photonmap::integrator;
 use photonmap::scene::Scene;
 use photonmap::stats::Stats;
 use std::process::ExitCode;
@@ -60,17 +60,11 @@ fn render(args: cli::RenderArgs) -> Result<()> {
         }
     }
     let pool = pool(args.threads)?;
-    stats.threads = pool.current_num_threads();
-    stats.scene = args.scene.display().to_string();
     let progress = progress::Bars::new(args.quiet);
-    let output = pool.install(|| -> Result<integrator::RenderOutput> {
-        let options = AccelOptions { robust: cfg.robust, ..Default::default() };
-        let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
-        let accel = stats.run("accel", reason, |_| AnyAccel::build(cfg.accel, &scene.mesh, options))?;
-        stats.accel = accel.name().to_string();
-        let progress: &dyn Progress = &progress;
-        Ok(photonmap::dispatch!(&accel, a => integrator::render(&scene, a, &cfg, progress, stats)))
-    })?;
+    let load = stats.stages.clone();
+    let mut output = pool.install(|| integrator::render_scene(&scene, &cfg, &progress))?;
+    output.stats.stages.splice(0..0, load);
+    output.stats.scene = args.scene.display().to_string();
     let mut stats = output.stats;
     output.film.write_exr(&args.output)?;
     if let Some(png) = &args.png {

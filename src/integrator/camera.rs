@@ -9,6 +9,7 @@ use crate::accel::Accel;
 use crate::config::IndirectMode;
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::{face_forward, Material};
+use crate::photon::irradiance::Irradiance;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use glam::Vec3;
@@ -132,7 +133,7 @@ impl<A: Accel> Shared<'_, A> {
         if !self.maps.indirect.is_empty() {
             l += match self.cfg.indirect {
                 IndirectMode::Estimate => match self.cached_irradiance(hit, wo, m, scratch, c) {
-                    Some((e, _)) => e,
+                    Some(e) => e.indirect,
                     None => {
                         c.queries += self.maps.indirect.len() as u64;
                         let (maps, g) = (&self.maps.indirect, &self.gather);
@@ -145,8 +146,8 @@ impl<A: Accel> Shared<'_, A> {
         l
     }
 
-    /// Reflected radiance `(indirect, caustic)` at a Lambertian surface from the precomputed
-    /// irradiance, or `None` (not Lambertian, no cache, or no site near enough).
+    /// Reflected radiance at a Lambertian surface from the precomputed irradiance, by kind of
+    /// path, or `None` (not Lambertian, no cache, or no site near enough).
     #[inline]
     fn cached_irradiance(
         &self,
@@ -155,15 +156,15 @@ impl<A: Accel> Shared<'_, A> {
         m: &Material,
         scratch: &mut Scratch,
         c: &mut Counters,
-    ) -> Option<(Vec3, Vec3)> {
+    ) -> Option<Irradiance> {
         let kd = m.lambertian()?;
         if self.cache.is_empty() {
             return None;
         }
         c.queries += 1;
-        let (e_ind, e_caus) = self.cache.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.neighbors)?;
+        let e = self.cache.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.neighbors)?;
         let f = kd * std::f32::consts::FRAC_1_PI;
-        Some((f * e_ind, f * e_caus))
+        Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
@@ -199,16 +200,17 @@ impl<A: Accel> Shared<'_, A> {
                     ray = Ray::new(offset_ray_origin(y.p, face_forward(y.n, s.wi)), s.wi);
                     continue;
                 }
-                let mut ly = direct_light(self, &y, wy, my, 1, rng, c);
-                if let Some((e_ind, e_caus)) = self.cached_irradiance(&y, wy, my, scratch, c) {
-                    ly += e_ind + e_caus;
+                let ly = if let Some(e) = self.cached_irradiance(&y, wy, my, scratch, c) {
+                    e.direct + e.indirect + e.caustic
                 } else {
+                    let mut ly = direct_light(self, &y, wy, my, 1, rng, c);
                     c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
                     let nb = &mut scratch.neighbors;
                     ly +=
                         PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &self.caustic_gather, nb);
                     ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &self.gather, nb);
-                }
+                    ly
+                };
                 sum += beta * ly;
                 break;
             }

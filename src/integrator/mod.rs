@@ -64,6 +64,9 @@ pub trait Progress: Sync {
 /// Irradiance is precomputed at every this-many-th indirect photon (Christensen uses 4).
 const IRRADIANCE_STRIDE: usize = 4;
 
+/// Shadow-ray samples for the direct irradiance of each cache site.
+const SITE_LIGHT_SAMPLES: u32 = 16;
+
 /// Progress that reports nothing.
 pub struct Quiet;
 impl Progress for Quiet {}
@@ -222,7 +225,29 @@ pub fn render<A: Accel>(
     } else {
         let reason = format!("{} sites, every {IRRADIANCE_STRIDE}th photon", sites.len());
         let cache = stats.run("irradiance", reason, |_| {
-            IrradianceCache::build(sites, &maps.indirect, &maps.caustic, &gather, &caustic_gather)
+            // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
+            // light and cosine sampling), times pi.
+            let empty = IrradianceCache::default();
+            let shared = Shared {
+                scene,
+                scene_camera: scene.camera,
+                accel,
+                lights: &lights,
+                maps: &maps,
+                cfg,
+                gather,
+                caustic_gather,
+                cache: &empty,
+            };
+            let white = crate::material::Material::Diffuse { kd: Vec3::ONE };
+            let direct = |i: usize, p: Vec3, n: Vec3| {
+                let mut rng = Pcg32::seed_from_u64(trace::mix(cfg.seed, 0xD12EC7, i as u64));
+                let mut c = Counters::default();
+                let hit = camera::SurfaceHit { p, n, prim: 0, t: 0.0 };
+                std::f32::consts::PI
+                    * direct::direct_light(&shared, &hit, n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c)
+            };
+            IrradianceCache::build(sites, &maps.indirect, &maps.caustic, &gather, &caustic_gather, direct)
         });
         stats.photons.insert(
             "irradiance_cache".into(),
@@ -262,6 +287,23 @@ pub fn render<A: Accel>(
         stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
     }
     RenderOutput { film, stats }
+}
+
+/// Builds the accelerator `cfg` asks for and renders: the whole pipeline behind `photonmap
+/// render`, for library users and tests.
+pub fn render_scene(
+    scene: &Scene,
+    cfg: &RenderConfig,
+    progress: &dyn Progress,
+) -> Result<RenderOutput, crate::accel::AccelError> {
+    let mut stats = Stats::default();
+    let options = crate::accel::AccelOptions { robust: cfg.robust, ..Default::default() };
+    let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
+    let accel =
+        stats.run("accel", reason, |_| crate::accel::AnyAccel::build(cfg.accel, &scene.mesh, options))?;
+    stats.accel = accel.name().to_string();
+    stats.threads = rayon::current_num_threads();
+    Ok(crate::dispatch!(&accel, a => render(scene, a, cfg, progress, stats)))
 }
 
 /// Packs and balances the maps of one pass.

@@ -4,9 +4,12 @@
 //! gathering `k` photons itself. It turns each indirect lookup (and each final-gather hit) from
 //! a k-nearest search plus `k` BRDF evaluations into a search for one point.
 //!
-//! Each site stores the indirect and the caustic irradiance separately: at camera hits the
-//! caustic map is still read directly (caustics must stay sharp), while final-gather hits use
-//! both.
+//! Each site stores its direct, indirect and caustic irradiance separately. At camera hits
+//! only the indirect part is used (direct light comes from shadow rays there and the caustic
+//! map is read directly, so caustics stay sharp); final-gather rays use all three, so a gather
+//! ray costs one lookup and no shadow ray (Christensen's global map holds direct light for the
+//! same reason; here it is computed at each site with shadow rays, since the first photon hits
+//! are not stored).
 
 use super::kdtree::{KdPoint, KdTree, Neighbor};
 use super::map::{GatherParams, PhotonHit, PhotonMap};
@@ -14,14 +17,23 @@ use super::pack;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A precomputed irradiance sample: 24 bytes.
+/// A precomputed irradiance sample: 28 bytes.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 struct Site {
     pos: [f32; 3],
     normal: u32,
+    direct: u32,
     indirect: u32,
     caustic: u32,
+}
+
+/// Irradiance at a surface point, by the kind of light path that brought it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Irradiance {
+    pub direct: Vec3,
+    pub indirect: Vec3,
+    pub caustic: Vec3,
 }
 
 impl KdPoint for Site {
@@ -50,23 +62,27 @@ pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<(Vec3, Vec3)> {
 }
 
 impl IrradianceCache {
-    /// Estimates the irradiance at each site from the maps (in parallel) and indexes the sites.
+    /// Estimates the irradiance at each site (in parallel) and indexes the sites: indirect and
+    /// caustic from the maps, direct from `direct(site_index, position, normal)`.
     pub fn build(
         sites: Vec<(Vec3, Vec3)>,
         indirect: &[PhotonMap],
         caustic: &[PhotonMap],
         gather: &GatherParams,
         caustic_gather: &GatherParams,
+        direct: impl Fn(usize, Vec3, Vec3) -> Vec3 + Sync,
     ) -> Self {
         let sites: Vec<Site> = sites
             .into_par_iter()
-            .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (pos, n)| {
+            .enumerate()
+            .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, (pos, n))| {
                 let e_ind: Vec3 = indirect.iter().map(|m| m.irradiance(pos, n, gather, scratch)).sum();
                 let e_caus: Vec3 =
                     caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
                 Site {
                     pos: pos.to_array(),
                     normal: pack::encode_dir_oct(n),
+                    direct: pack::rgb9e5_encode(direct(i, pos, n)),
                     indirect: pack::rgb9e5_encode(e_ind),
                     caustic: pack::rgb9e5_encode(e_caus),
                 }
@@ -87,10 +103,10 @@ impl IrradianceCache {
         self.tree.bytes()
     }
 
-    /// `(indirect, caustic)` irradiance at `x` on the side of unit normal `ns`, from the nearest
-    /// site whose normal agrees; `None` if no site is near enough.
+    /// Irradiance at `x` on the side of unit normal `ns`, from the nearest site whose normal
+    /// agrees; `None` if no site is near enough.
     #[inline]
-    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut Vec<Neighbor>) -> Option<(Vec3, Vec3)> {
+    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut Vec<Neighbor>) -> Option<Irradiance> {
         self.tree.knn(x, CANDIDATES, self.max_radius, scratch);
         let mut best: Option<(f32, &Site)> = None;
         for nb in scratch.iter() {
@@ -100,7 +116,11 @@ impl IrradianceCache {
                 best = Some((nb.dist2, s));
             }
         }
-        best.map(|(_, s)| (pack::rgb9e5_decode(s.indirect), pack::rgb9e5_decode(s.caustic)))
+        best.map(|(_, s)| Irradiance {
+            direct: pack::rgb9e5_decode(s.direct),
+            indirect: pack::rgb9e5_decode(s.indirect),
+            caustic: pack::rgb9e5_decode(s.caustic),
+        })
     }
 }
 
@@ -125,14 +145,18 @@ mod tests {
         let sites = pick_sites(std::slice::from_ref(&hits), 3);
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
-        let cache = IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params);
+        let cache =
+            IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _, _| {
+                Vec3::X
+            });
         let mut scratch = Vec::new();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
-        let (e, c) = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
-        assert!((e.x - 1.0).abs() < 0.1, "{e}");
-        assert_eq!(c, Vec3::ZERO);
-        let (e, _) = cache.lookup(Vec3::new(0.0, 0.5, 0.5), Vec3::X, &mut scratch).expect("a wall site");
-        assert!((e.x - 1.0).abs() < 0.1, "{e}");
+        let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
+        assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");
+        assert_eq!(e.caustic, Vec3::ZERO);
+        assert_eq!(e.direct, Vec3::X);
+        let e = cache.lookup(Vec3::new(0.0, 0.5, 0.5), Vec3::X, &mut scratch).expect("a wall site");
+        assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");
         // Seen from below the floor nothing matches.
         assert!(cache.lookup(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y, &mut scratch).is_none());
     }
