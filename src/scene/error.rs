@@ -5,20 +5,40 @@ use std::path::PathBuf;
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{}: {source}", path.display())]
-    Io { path: PathBuf, source: std::io::Error },
+    /// (`error` is part of the message, not a `source`: shown with its causes, as the
+    /// command does, it would otherwise be repeated.)
+    #[error("{}: {}", one_line(path.display()), one_line(error))]
+    Io { path: PathBuf, error: std::io::Error },
     /// TOML syntax or schema error; `message` carries the line and column.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {}", one_line(path.display()), one_line(message))]
     Toml { path: PathBuf, message: String },
     /// A value that parsed but makes no sense (NaN, out of range, unknown name).
-    #[error("{}: field `{field}`: {message}", path.display())]
+    #[error("{}: field `{}`: {}", one_line(path.display()), one_line(field), one_line(message))]
     Field { path: PathBuf, field: String, message: String },
     /// A malformed OBJ or MTL line.
-    #[error("{}:{line}: {message}", path.display())]
+    #[error("{}:{line}: {}", one_line(path.display()), one_line(message))]
     Line { path: PathBuf, line: usize, message: String },
     /// A problem in a whole file, with no single line to blame.
-    #[error("{}: {message}", path.display())]
+    #[error("{}: {}", one_line(path.display()), one_line(message))]
     File { path: PathBuf, message: String },
+}
+
+/// `s` with control characters and line separators escaped, so that an error naming a file or
+/// quoting the input stays on one line.
+fn one_line(s: impl std::fmt::Display) -> String {
+    let s = s.to_string();
+    if !s.chars().any(|c| c.is_control() || matches!(c, '\u{2028}' | '\u{2029}')) {
+        return s;
+    }
+    s.chars()
+        .map(|c| {
+            if c.is_control() || matches!(c, '\u{2028}' | '\u{2029}') {
+                c.escape_default().to_string()
+            } else {
+                c.to_string()
+            }
+        })
+        .collect()
 }
 
 impl SceneError {

@@ -102,9 +102,13 @@ impl SceneFile {
     /// Parses the TOML text of `path`; syntax and schema errors carry line and column.
     pub fn parse(path: &Path, text: &str) -> Result<Self, SceneError> {
         toml::from_str(text).map_err(|e| {
-            let mut message = e.message().trim().to_owned();
+            // The parser's message may run over several lines ("invalid string\nexpected ...").
+            let mut message = e.message().trim().lines().map(str::trim).collect::<Vec<_>>().join("; ");
             if let Some(span) = e.span() {
-                let before = &text[..span.start.min(text.len())];
+                // An error at the end of the file is shown at the end of its last line.
+                let at = span.start.min(text.len());
+                let at = if at == text.len() { text.trim_end().len() } else { at };
+                let before = &text[..at];
                 let line = before.matches('\n').count() + 1;
                 let column = before.len() - before.rfind('\n').map_or(0, |i| i + 1) + 1;
                 message = format!("line {line}, column {column}: {message}");

@@ -44,8 +44,8 @@ impl Scene {
     /// Loads the scene file at `path` and everything it references.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path)
-            .map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|error| SceneError::Io { path: path.to_owned(), error })?;
         Scene::from_str(path, &text)
     }
 
@@ -120,8 +120,14 @@ fn camera(path: &Path, c: &file::CameraEntry) -> Result<Camera, SceneError> {
     let eye = finite3(path, "camera.eye", c.eye)?;
     let target = finite3(path, "camera.target", c.target)?;
     let up = finite3(path, "camera.up", c.up)?;
-    if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0) {
-        return Err(SceneError::field(path, "camera.vfov_deg", format!("{} is not in (0, 180)", c.vfov_deg)));
+    // A field of view so small that its tangent rounds to 0 would give every pixel one ray.
+    let tan_half = (0.5 * c.vfov_deg.to_radians()).tan();
+    if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0 && tan_half > 0.0 && tan_half.is_finite()) {
+        return Err(SceneError::field(
+            path,
+            "camera.vfov_deg",
+            format!("{} is not in (0, 180), or too small to be used", c.vfov_deg),
+        ));
     }
     for (name, v) in [("camera.width", c.width), ("camera.height", c.height)] {
         if v == 0 || v > MAX_IMAGE_SIDE {

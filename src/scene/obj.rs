@@ -99,7 +99,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
 }
 
 fn read(path: &Path) -> Result<String, SceneError> {
-    let bytes = std::fs::read(path).map_err(|source| SceneError::Io { path: path.to_owned(), source })?;
+    let bytes = std::fs::read(path).map_err(|error| SceneError::Io { path: path.to_owned(), error })?;
     String::from_utf8(bytes).map_err(|e| {
         let line = 1 + e.as_bytes()[..e.utf8_error().valid_up_to()].iter().filter(|&&b| b == b'\n').count();
         SceneError::line(path, line, "not UTF-8 text")
@@ -114,65 +114,77 @@ struct Run {
     line: usize,
 }
 
-/// Checks each statement tobj reads: `v` has 3 (or 4) finite numbers, every `f` has at least 3
-/// vertex references that parse and are in range (negative ones count from the end), `mtllib`
-/// names an existing file.
+/// Checks each statement tobj reads, as tobj reads it (words split on whitespace, no trailing
+/// comments), so that whatever tobj would refuse, or panic on, is refused here with a line:
+/// `v` has 3, 4 (`w`) or 6 (RGB) finite numbers; `vt`/`vn` have 2/3 numbers; every `f` has at
+/// least 3 vertex references and each of their `v/vt/vn` indices parses and is in range
+/// (negative ones count from the end); `l` is a polyline of at most 2 vertices; `mtllib` names
+/// an existing file and `usemtl` a material.
 fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
-    let mut vertices: i64 = 0;
+    let mut counts = [0i64; 3]; // v, vt, vn defined so far
     let mut faces = 0usize;
     let mut runs: Vec<Run> = Vec::new();
     let mut material: Option<(String, usize)> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
-        let mut words = raw.split('#').next().unwrap_or("").split_whitespace();
+        let mut words = raw.split_whitespace();
         let Some(keyword) = words.next() else { continue };
+        let bad = |message: String| SceneError::line(path, line, message);
+        // tobj reads the rest of the line after the first space as a name.
+        let tobj_name = raw.split_once(' ').map_or("", |(_, rest)| rest).trim();
+        if matches!(keyword, "v" | "f" | "l") && raw.contains('#') {
+            return Err(bad(format!(
+                "`#` in a `{keyword}` statement: comments must be on lines of their own"
+            )));
+        }
         match keyword {
             "v" => {
                 let nums: Vec<&str> = words.collect();
-                if nums.len() < 3 {
-                    return Err(SceneError::line(
-                        path,
-                        line,
-                        format!("vertex needs 3 coordinates, found {}", nums.len()),
-                    ));
+                if !matches!(nums.len(), 3 | 4 | 6) {
+                    return Err(bad(format!(
+                        "vertex needs 3 coordinates (then a w, or an RGB colour), found {} number(s)",
+                        nums.len()
+                    )));
                 }
-                for n in &nums[..3] {
+                let mut xyzw = [1.0f32; 4];
+                for (k, n) in nums.iter().enumerate() {
                     match n.parse::<f32>() {
-                        Ok(x) if x.is_finite() => {}
-                        Ok(x) => {
-                            return Err(SceneError::line(
-                                path,
-                                line,
-                                format!("vertex coordinate {x} is not finite"),
-                            ))
-                        }
-                        Err(_) => return Err(SceneError::line(path, line, format!("`{n}` is not a number"))),
+                        Ok(x) if x.is_finite() => xyzw[k.min(3)] = x,
+                        Ok(x) => return Err(bad(format!("vertex coordinate {x} is not finite"))),
+                        Err(_) => return Err(bad(format!("`{n}` is not a number"))),
                     }
                 }
-                vertices += 1;
+                if nums.len() == 4 && !xyzw[..3].iter().all(|x| (x / xyzw[3]).is_finite()) {
+                    return Err(bad(format!("vertex w = {} gives non-finite coordinates", xyzw[3])));
+                }
+                counts[0] += 1;
             }
-            "f" => {
+            "vt" | "vn" => {
+                let (need, slot) = if keyword == "vt" { (2, 1) } else { (3, 2) };
+                let nums: Vec<&str> = words.take(need).collect();
+                if nums.len() < need || nums.iter().any(|n| n.parse::<f32>().is_err()) {
+                    return Err(bad(format!("`{keyword}` needs {need} numbers")));
+                }
+                counts[slot] += 1;
+            }
+            "f" | "l" => {
                 let refs: Vec<&str> = words.collect();
-                if refs.len() < 3 {
-                    return Err(SceneError::line(
-                        path,
-                        line,
-                        format!("face needs 3 vertices, found {}", refs.len()),
-                    ));
+                if keyword == "f" && refs.len() < 3 {
+                    return Err(bad(format!("face needs 3 vertices, found {}", refs.len())));
                 }
                 for r in &refs {
-                    let first = r.split('/').next().unwrap_or("");
-                    let idx: i64 = first.parse().map_err(|_| {
-                        SceneError::line(path, line, format!("`{r}` is not a vertex reference"))
-                    })?;
-                    let resolved = if idx < 0 { vertices + idx } else { idx - 1 };
-                    if idx == 0 || resolved < 0 || resolved >= vertices {
-                        return Err(SceneError::line(
-                            path,
-                            line,
-                            format!("vertex index {idx} out of range: {vertices} vertices defined so far"),
-                        ));
+                    check_reference(r, &counts)
+                        .map_err(|m| bad(if r.contains('/') { format!("`{r}`: {m}") } else { m }))?;
+                }
+                if keyword == "l" {
+                    // tobj would read a polyline of 3 or more vertices as a face.
+                    if refs.len() > 2 {
+                        return Err(bad(format!(
+                            "polyline (`l`) of {} vertices: only faces (`f`) are rendered",
+                            refs.len()
+                        )));
                     }
+                    continue;
                 }
                 faces += 1;
                 let name = material.as_ref().map(|(n, _)| n);
@@ -187,17 +199,22 @@ fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
             }
             "usemtl" => {
                 let name = raw.split('#').next().unwrap_or("").trim()["usemtl".len()..].trim();
+                if name.is_empty() || tobj_name.is_empty() {
+                    return Err(bad("usemtl needs a material name, after a space".into()));
+                }
                 material = Some((name.to_owned(), line));
             }
             "mtllib" => {
-                let name = raw.split('#').next().unwrap_or("").trim()["mtllib".len()..].trim();
-                let mtl = path.parent().unwrap_or(Path::new(".")).join(name);
+                // The name runs to the end of the line (it may hold spaces), as tobj reads it.
+                let mtl = path.parent().unwrap_or(Path::new(".")).join(tobj_name);
+                if tobj_name.is_empty() {
+                    return Err(bad("mtllib needs a file name, after a space".into()));
+                }
                 if !mtl.is_file() {
-                    return Err(SceneError::line(
-                        path,
-                        line,
-                        format!("material library {} not found", mtl.display()),
-                    ));
+                    return Err(bad(format!(
+                        "material library `{tobj_name}` not found at {}",
+                        mtl.display()
+                    )));
                 }
             }
             _ => {}
@@ -209,13 +226,37 @@ fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
     Ok(runs)
 }
 
+/// Checks one `v`, `v/vt`, `v//vn` or `v/vt/vn` reference against the `v`, `vt` and `vn`
+/// counts so far (1-based; negative counts back from the last one).
+fn check_reference(r: &str, counts: &[i64; 3]) -> Result<(), String> {
+    let parts: Vec<&str> = r.split('/').collect();
+    if parts.len() > 3 || parts[0].is_empty() {
+        return Err("not a vertex reference (v, v/vt, v//vn or v/vt/vn)".into());
+    }
+    for ((part, &count), what) in parts.iter().zip(counts).zip(["vertex", "texture coordinate", "normal"]) {
+        if part.is_empty() {
+            continue;
+        }
+        let idx: i64 = part.parse().map_err(|_| format!("`{part}` is not a {what} index"))?;
+        let resolved = if idx < 0 { count.saturating_add(idx) } else { idx - 1 };
+        if idx == 0 || resolved < 0 || resolved >= count {
+            return Err(format!("{what} index {idx} out of range: {count} defined so far"));
+        }
+    }
+    Ok(())
+}
+
 /// Checks the numeric MTL statements the renderer uses.
 fn check_mtl(path: &Path, text: &str) -> Result<(), SceneError> {
     let mut current: Option<String> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
-        let mut words = raw.split('#').next().unwrap_or("").split_whitespace();
+        // Words as tobj splits them: a `#` starts a comment only as the first word.
+        let mut words = raw.split_whitespace();
         let Some(keyword) = words.next() else { continue };
+        if keyword.starts_with('#') {
+            continue;
+        }
         let args: Vec<&str> = words.collect();
         let arity = match keyword {
             "newmtl" => {
@@ -234,6 +275,13 @@ fn check_mtl(path: &Path, text: &str) -> Result<(), SceneError> {
         }
         if args.len() < arity {
             return Err(SceneError::line(path, line, format!("`{keyword}` needs {arity} number(s)")));
+        }
+        if keyword == "illum" && args[0].parse::<u8>().is_err() {
+            return Err(SceneError::line(
+                path,
+                line,
+                format!("`illum`: `{}` is not a model number 0..=255", args[0]),
+            ));
         }
         for a in &args[..arity] {
             match a.parse::<f32>() {

@@ -1,0 +1,246 @@
+//! The `photonmap` binary on bad input: each case runs `photonmap render SCENE -o out.exr` in
+//! a temporary directory holding the Cornell box (altered as the case says) and checks the
+//! project rule: a non-zero exit, one line on stderr starting `photonmap: error:` that names
+//! the file and line or the field at fault, no panic, and nothing left behind (no image, no
+//! temporary file; an existing image untouched).
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+const TOML: &str = include_str!("../scenes/cornell/cornell.toml");
+const OBJ: &str = include_str!("../scenes/cornell/cornell.obj");
+const MTL: &str = include_str!("../scenes/cornell/cornell.mtl");
+
+/// Settings that keep a render that is (wrongly) not refused short; a case may override any.
+const QUICK: &[(&str, &str)] = &[
+    ("--width", "16"),
+    ("--height", "16"),
+    ("--spp", "1"),
+    ("--photons", "2000"),
+    ("--caustic-photons", "2000"),
+];
+
+/// Longest a run may take: a bad input is refused before any real work.
+const LIMIT: Duration = Duration::from_secs(60);
+
+struct Case {
+    name: &'static str,
+    /// Scene file passed to `render` (relative to the directory).
+    scene: &'static str,
+    /// Output passed to `-o`.
+    output: &'static str,
+    /// Flags, overriding those of `QUICK` with the same name.
+    flags: &'static [(&'static str, &'static str)],
+    /// Changes to the Cornell box files: (file, text to find, replacement).
+    edits: &'static [(&'static str, &'static str, &'static str)],
+    /// What the error line must contain (the file and line, or the field).
+    expect: &'static [&'static str],
+}
+
+const fn case(name: &'static str, expect: &'static [&'static str]) -> Case {
+    Case { name, scene: "cornell.toml", output: "out.exr", flags: &[], edits: &[], expect }
+}
+
+fn cases() -> Vec<Case> {
+    vec![
+        Case { scene: "nosuch.toml", ..case("missing scene file", &["nosuch.toml", "No such file"]) },
+        Case {
+            edits: &[("cornell.toml", "obj = \"cornell.obj\"", "obj = \"missing.obj\"")],
+            ..case("missing OBJ", &["missing.obj", "No such file"])
+        },
+        Case {
+            edits: &[("cornell.obj", "v 0.556 0.5488 0.0\n", "v 0.556 x 0.0\n")],
+            ..case("malformed OBJ line", &["cornell.obj:13:", "`x` is not a number"])
+        },
+        Case {
+            edits: &[("cornell.obj", "f 5 6 7\n", "f 5 6 700\n")],
+            ..case("index out of range", &["cornell.obj:18:", "vertex index 700 out of range"])
+        },
+        Case {
+            edits: &[("cornell.obj", "v 0.556 0.5488 0.0\n", "v 0.556 nan 0.0\n")],
+            ..case("NaN coordinate", &["cornell.obj:13:", "not finite"])
+        },
+        Case {
+            edits: &[("cornell.toml", "width = 256", "width = 256\nfocal_length = 35")],
+            ..case("unknown TOML key", &["cornell.toml", "line 12", "unknown field `focal_length`"])
+        },
+        Case {
+            edits: &[("cornell.toml", "type = \"mirror\"", "type = \"plastic\"")],
+            ..case("unknown material type", &["cornell.toml", "line 35", "unknown variant `plastic`"])
+        },
+        Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
+        Case {
+            flags: &[("--width", "1000000")],
+            ..case("--width 1000000", &["cornell.toml", "width", "1000000"])
+        },
+        Case {
+            flags: &[("--photons", "1000000000000")],
+            ..case("--photons 10^12", &["cornell.toml", "photons", "1000000000000", "GB"])
+        },
+        Case { flags: &[("--spp", "0")], ..case("--spp 0", &["cornell.toml", "spp"]) },
+        Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
+        Case { output: "missing/out.exr", ..case("output into a missing directory", &["missing"]) },
+    ]
+}
+
+/// A directory holding the Cornell box with the case's edits applied.
+fn setup(case: &Case) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (file, text) in [("cornell.toml", TOML), ("cornell.obj", OBJ), ("cornell.mtl", MTL)] {
+        let mut text = text.to_owned();
+        for &(f, find, replace) in case.edits {
+            if f == file {
+                assert!(text.contains(find), "{}: `{find}` not in {file}", case.name);
+                text = text.replacen(find, replace, 1);
+            }
+        }
+        fs::write(dir.path().join(file), text).unwrap();
+    }
+    dir
+}
+
+/// Every file under `dir` with its content.
+fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut files = BTreeMap::new();
+    let mut stack = vec![dir.to_owned()];
+    while let Some(d) = stack.pop() {
+        for entry in fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else {
+                let name = path.strip_prefix(dir).unwrap().display().to_string();
+                files.insert(name, fs::read(&path).unwrap());
+            }
+        }
+    }
+    files
+}
+
+struct Run {
+    code: Option<i32>,
+    stderr: String,
+    seconds: f64,
+}
+
+/// Runs `photonmap render` in `dir`, killing it if it outlives `LIMIT`.
+fn render(dir: &Path, case: &Case) -> Run {
+    let mut flags: Vec<(&str, &str)> =
+        QUICK.iter().filter(|(f, _)| !case.flags.iter().any(|(g, _)| g == f)).copied().collect();
+    flags.extend_from_slice(case.flags);
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_photonmap"));
+    cmd.current_dir(dir).args(["render", case.scene, "-o", case.output, "--quiet"]);
+    for (flag, value) in flags {
+        cmd.args([flag, value]);
+    }
+    cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).env_remove("RUST_BACKTRACE");
+    let start = Instant::now();
+    let mut child = cmd.spawn().expect("photonmap could not be started");
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        if start.elapsed() > LIMIT {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("{}: photonmap still running after {LIMIT:?}", case.name);
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    Run { code: status.code(), stderr, seconds }
+}
+
+/// `Err(reason)` if the run broke the rule for bad input.
+fn check(case: &Case, run: &Run) -> Result<(), String> {
+    let err = &run.stderr;
+    if run.code == Some(0) {
+        return Err(format!("exit status 0; stderr: {err:?}"));
+    }
+    if run.code.is_none() {
+        return Err(format!("killed by a signal; stderr: {err:?}"));
+    }
+    if err.contains("panicked") {
+        return Err(format!("panicked: {err:?}"));
+    }
+    let line = err.strip_suffix('\n').unwrap_or(err);
+    if line.contains('\n') || line.is_empty() {
+        return Err(format!("stderr is not one line: {err:?}"));
+    }
+    if !line.starts_with("photonmap: error:") {
+        return Err(format!("stderr does not start `photonmap: error:`: {err:?}"));
+    }
+    for want in case.expect {
+        if !line.contains(want) {
+            return Err(format!("error does not say `{want}`: {err:?}"));
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn bad_input_is_refused_with_one_line_and_no_output() {
+    let mut failures = Vec::new();
+    for case in cases() {
+        let dir = setup(&case);
+        let before = snapshot(dir.path());
+        let run = render(dir.path(), &case);
+        let mut problems: Vec<String> = check(&case, &run).err().into_iter().collect();
+        let after = snapshot(dir.path());
+        if after.keys().ne(before.keys()) {
+            problems.push(format!(
+                "files left behind: {:?}",
+                after.keys().filter(|k| !before.contains_key(*k)).collect::<Vec<_>>()
+            ));
+        }
+        if run.seconds > 5.0 {
+            problems.push(format!("took {:.1} s to refuse", run.seconds));
+        }
+        for p in problems {
+            failures.push(format!("{}: {p}", case.name));
+        }
+    }
+    assert!(failures.is_empty(), "\n{}", failures.join("\n"));
+}
+
+/// A budget of 10^12 photons (about 20 TB) is refused up front, with an estimate, before
+/// anything is allocated or loaded for long.
+#[test]
+fn an_absurd_photon_budget_is_refused_quickly_with_an_estimate() {
+    let case = Case { flags: &[("--photons", "1000000000000")], ..case("--photons 10^12", &["photons"]) };
+    let dir = setup(&case);
+    let run = render(dir.path(), &case);
+    check(&case, &run).unwrap();
+    assert!(run.seconds < 5.0, "took {:.1} s", run.seconds);
+    assert!(run.stderr.contains("GB"), "no memory estimate: {}", run.stderr);
+}
+
+/// A failed render leaves an existing image as it was.
+#[test]
+fn a_failed_render_leaves_the_old_image_untouched() {
+    for case in cases().into_iter().filter(|c| c.output == "out.exr") {
+        let dir = setup(&case);
+        fs::write(dir.path().join("out.exr"), b"the previous image").unwrap();
+        let before = snapshot(dir.path());
+        let run = render(dir.path(), &case);
+        check(&case, &run).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+        assert_eq!(snapshot(dir.path()), before, "{}: the directory changed", case.name);
+    }
+}
+
+/// The harness itself: the unaltered scene renders, so the cases above fail for their input.
+#[test]
+fn the_unaltered_scene_renders() {
+    let case = case("valid", &[]);
+    let dir = setup(&case);
+    let run = render(dir.path(), &case);
+    assert_eq!(run.code, Some(0), "stderr: {}", run.stderr);
+    assert!(dir.path().join("out.exr").is_file());
+    let names: Vec<String> = snapshot(dir.path()).into_keys().collect();
+    assert_eq!(names, ["cornell.mtl", "cornell.obj", "cornell.toml", "out.exr"], "stray files");
+}
