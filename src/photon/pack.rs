@@ -37,7 +37,7 @@ fn dequantize_snorm16(q: u32) -> f32 {
 /// into two 16-bit octahedral coordinates: `u` in the low half, `v` in the high half.
 pub fn encode_dir_oct(d: Vec3) -> u32 {
     let l1 = d.x.abs() + d.y.abs() + d.z.abs();
-    if !(l1 > 0.0) || !l1.is_finite() {
+    if l1.is_nan() || l1 <= 0.0 || l1.is_infinite() {
         return encode_dir_oct(Vec3::Z);
     }
     let d = d / l1;

@@ -116,7 +116,7 @@ impl<T: KdPoint> KdTree<T> {
         out: &mut Vec<Neighbor>,
     ) {
         out.clear();
-        if k == 0 || self.items.is_empty() || !(max_radius >= 0.0) {
+        if k == 0 || self.items.is_empty() || max_radius.is_nan() || max_radius < 0.0 {
             return;
         }
         let items = &self.items[..];
@@ -203,7 +203,7 @@ impl<T: KdPoint> KdTree<T> {
         dist2: F,
         mut f: G,
     ) {
-        if self.items.is_empty() || !(radius >= 0.0) {
+        if self.items.is_empty() || radius.is_nan() || radius < 0.0 {
             return;
         }
         let items = &self.items[..];
