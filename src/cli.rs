@@ -90,7 +90,7 @@ pub struct SettingsArgs {
     /// Photons aimed at specular objects for the caustic map [default: 300000].
     #[arg(long)]
     pub caustic_photons: Option<u64>,
-    /// Camera samples per pixel [default: 16].
+    /// Camera samples per pixel [default: 64].
     #[arg(long)]
     pub spp: Option<u32>,
     /// Random seed; the same seed gives the same image for any thread count [default: 1].

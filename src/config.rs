@@ -145,7 +145,7 @@ impl RenderSettings {
             height,
             photons: self.photons.unwrap_or(300_000),
             caustic_photons: self.caustic_photons.unwrap_or(300_000),
-            spp: self.spp.unwrap_or(16),
+            spp: self.spp.unwrap_or(64),
             seed: self.seed.unwrap_or(1),
             max_bounces: self.max_bounces.unwrap_or(64),
             max_depth: self.max_depth.unwrap_or(16),
