@@ -2,7 +2,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use photonmap::accel::AccelKind;
-use photonmap::config::{ColorMode, IndirectMode, Kernel, RenderSettings};
+use photonmap::config::{ColorMode, Component, IndirectMode, Kernel, RenderSettings};
 use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
@@ -84,7 +84,7 @@ pub struct SettingsArgs {
     /// Use Embree's robust (watertight) mode [default: true].
     #[arg(long)]
     pub robust: Option<bool>,
-    /// Photons emitted for the indirect map [default: 300000].
+    /// Photons emitted for the indirect map [default: 1000000].
     #[arg(long)]
     pub photons: Option<u64>,
     /// Photons aimed at specular objects for the caustic map [default: 300000].
@@ -120,7 +120,7 @@ pub struct SettingsArgs {
     /// Rays per final gather [default: 32].
     #[arg(long)]
     pub final_gather_rays: Option<u32>,
-    /// Photons carry one colour channel (three maps, the lecture's way) or RGB [default: per-channel].
+    /// Photons carry one colour channel (three maps, the lecture's way) or RGB [default: rgb].
     #[arg(long, value_enum)]
     pub color: Option<ColorMode>,
     /// Density-estimation kernel [default: cone].
@@ -133,6 +133,9 @@ pub struct SettingsArgs {
     /// gathering photons there (Christensen 1999) [default: true].
     #[arg(long)]
     pub irradiance_cache: Option<bool>,
+    /// Render only one term of the sum: emitted, direct, caustic or indirect [default: all].
+    #[arg(long, value_enum)]
+    pub component: Option<Component>,
 }
 
 impl SettingsArgs {
@@ -156,6 +159,7 @@ impl SettingsArgs {
             light_samples: self.light_samples,
             robust: self.robust,
             irradiance_cache: self.irradiance_cache,
+            component: self.component,
         }
     }
 }

@@ -33,6 +33,31 @@ pub enum Kernel {
     Gaussian,
 }
 
+/// Which part of the light a render shows (the lecture's sum, term by term).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    /// Everything: the image.
+    #[default]
+    All,
+    /// Emitters seen directly or through mirrors and glass.
+    Emitted,
+    /// Direct light from shadow rays.
+    Direct,
+    /// The caustic map's estimate.
+    Caustic,
+    /// The indirect map's estimate (or the final gather).
+    Indirect,
+}
+
+impl Component {
+    /// Whether a render of `self` includes the term `c`.
+    #[inline]
+    pub fn shows(self, c: Component) -> bool {
+        self == Component::All || self == c
+    }
+}
+
 /// Optional settings as written in `[render]` (or given on the command line). `None` means
 /// "use the default".
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -56,6 +81,7 @@ pub struct RenderSettings {
     pub light_samples: Option<u32>,
     pub robust: Option<bool>,
     pub irradiance_cache: Option<bool>,
+    pub component: Option<Component>,
 }
 
 impl RenderSettings {
@@ -82,7 +108,8 @@ impl RenderSettings {
             kernel,
             light_samples,
             robust,
-            irradiance_cache
+            irradiance_cache,
+            component
         )
     }
 }
@@ -116,6 +143,8 @@ pub struct RenderConfig {
     pub light_samples: u32,
     /// Precompute irradiance at photon positions for diffuse lookups (Christensen 1999).
     pub irradiance_cache: bool,
+    /// Which term of the sum is shown.
+    pub component: Component,
 }
 
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
@@ -143,7 +172,7 @@ impl RenderSettings {
             robust: self.robust.unwrap_or(true),
             width,
             height,
-            photons: self.photons.unwrap_or(300_000),
+            photons: self.photons.unwrap_or(1_000_000),
             caustic_photons: self.caustic_photons.unwrap_or(300_000),
             spp: self.spp.unwrap_or(64),
             seed: self.seed.unwrap_or(1),
@@ -155,10 +184,11 @@ impl RenderSettings {
             caustic_gather_radius: self.caustic_gather_radius,
             indirect: self.indirect.unwrap_or(IndirectMode::Estimate),
             final_gather_rays: self.final_gather_rays.unwrap_or(32),
-            color: self.color.unwrap_or(ColorMode::PerChannel),
+            color: self.color.unwrap_or(ColorMode::Rgb),
             kernel: self.kernel.unwrap_or(Kernel::Cone),
             light_samples: self.light_samples.unwrap_or(1),
             irradiance_cache: self.irradiance_cache.unwrap_or(true),
+            component: self.component.unwrap_or_default(),
         };
         c.validate()?;
         Ok(c)

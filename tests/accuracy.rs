@@ -84,7 +84,7 @@ fn furnace_is_two_everywhere() {
     assert!(rmse < 0.11, "furnace RMSE {rmse}");
 }
 
-/// Every option of the CLI still gives a sane Cornell box (RGB photons, final gathering, no
+/// Every option of the CLI still gives a sane Cornell box (three per-channel maps, final gathering, no
 /// irradiance cache, other kernels).
 #[test]
 fn every_mode_stays_close_to_the_reference() {
@@ -93,7 +93,7 @@ fn every_mode_stays_close_to_the_reference() {
     let r = reference("cornell");
     let base = RenderSettings { photons: Some(100_000), ..settings() };
     let modes = [
-        ("rgb", RenderSettings { color: Some(ColorMode::Rgb), ..base.clone() }, 0.03),
+        ("per-channel", RenderSettings { color: Some(ColorMode::PerChannel), ..base.clone() }, 0.03),
         ("no cache", RenderSettings { irradiance_cache: Some(false), ..base.clone() }, 0.03),
         ("box", RenderSettings { kernel: Some(Kernel::Box), ..base.clone() }, 0.03),
         ("gaussian", RenderSettings { kernel: Some(Kernel::Gaussian), ..base.clone() }, 0.03),

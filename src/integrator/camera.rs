@@ -6,7 +6,7 @@
 use super::direct::direct_light;
 use super::{Counters, Shared};
 use crate::accel::Accel;
-use crate::config::IndirectMode;
+use crate::config::{Component, IndirectMode};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::{face_forward, Material};
 use crate::photon::irradiance::Irradiance;
@@ -88,7 +88,9 @@ impl<A: Accel> Shared<'_, A> {
             let wo = -ray.dir.normalize();
             // Emission seen directly or through mirrors and glass (direct light at diffuse
             // surfaces comes from shadow rays instead).
-            l += beta * m.emitted(hit.n, wo);
+            if self.cfg.component.shows(Component::Emitted) {
+                l += beta * m.emitted(hit.n, wo);
+            }
             if m.is_specular() {
                 if depth == self.cfg.max_depth {
                     break;
@@ -117,8 +119,12 @@ impl<A: Accel> Shared<'_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Vec3 {
-        let mut l = direct_light(self, hit, wo, m, self.cfg.light_samples, rng, c);
-        if !self.maps.caustic.is_empty() {
+        let only = self.cfg.component;
+        let mut l = Vec3::ZERO;
+        if only.shows(Component::Direct) {
+            l += direct_light(self, hit, wo, m, self.cfg.light_samples, rng, c);
+        }
+        if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
             c.queries += self.maps.caustic.len() as u64;
             l += PhotonMaps::radiance(
                 &self.maps.caustic,
@@ -130,7 +136,7 @@ impl<A: Accel> Shared<'_, A> {
                 &mut scratch.neighbors,
             );
         }
-        if !self.maps.indirect.is_empty() {
+        if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
             l += match self.cfg.indirect {
                 IndirectMode::Estimate => match self.cached_irradiance(hit, wo, m, scratch, c) {
                     Some(e) => e.indirect,

@@ -161,7 +161,9 @@ pub fn render<A: Accel>(
             progress.finish();
             stats.rays.photon += out.rays;
             if cfg.irradiance_cache {
-                sites = irradiance::pick_sites(&out.maps, IRRADIANCE_STRIDE);
+                // The same density of sites whatever the colour mode: per-channel maps split
+                // the photons three ways, so each contributes a third as many sites.
+                sites = irradiance::pick_sites(&out.maps, IRRADIANCE_STRIDE * out.maps.len());
             }
             maps.indirect =
                 stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
@@ -223,7 +225,7 @@ pub fn render<A: Accel>(
         stats.skip("irradiance", why);
         IrradianceCache::default()
     } else {
-        let reason = format!("{} sites, every {IRRADIANCE_STRIDE}th photon", sites.len());
+        let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
         let cache = stats.run("irradiance", reason, |_| {
             // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
             // light and cosine sampling), times pi.
@@ -241,6 +243,9 @@ pub fn render<A: Accel>(
             };
             let white = crate::material::Material::Diffuse { kd: Vec3::ONE };
             let direct = |i: usize, p: Vec3, n: Vec3| {
+                if cfg.indirect != crate::config::IndirectMode::FinalGather {
+                    return Vec3::ZERO; // only final gathering reads it
+                }
                 let mut rng = Pcg32::seed_from_u64(trace::mix(cfg.seed, 0xD12EC7, i as u64));
                 let mut c = Counters::default();
                 let hit = camera::SurfaceHit { p, n, prim: 0, t: 0.0 };
