@@ -28,7 +28,7 @@ fn point_set() -> impl Strategy<Value = Vec<Vec3>> {
             .prop_map(|(pool, idx)| idx.iter().map(|&i| pool[i % pool.len()]).collect()),
         // Random points plus a heavy pile of one duplicate.
         (vec(point(), 0..500), point(), 0usize..1000).prop_map(|(mut v, p, m)| {
-            v.extend(std::iter::repeat(p).take(m));
+            v.extend(std::iter::repeat_n(p, m));
             v
         }),
         // A plane z = c.
