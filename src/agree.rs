@@ -83,15 +83,17 @@ impl<'a> SurfaceSampler<'a> {
         SurfaceSampler { mesh, prims, cdf }
     }
 
-    /// A point, its unit geometric normal, and its triangle; `None` without any area.
-    fn sample(&self, rng: &mut Pcg64) -> Option<(Vec3, Vec3)> {
+    /// A point, its unit geometric normal and its rounding-error bound; `None` without any
+    /// area.
+    fn sample(&self, rng: &mut Pcg64) -> Option<(Vec3, Vec3, Vec3)> {
         let total = *self.cdf.last()?;
         let x = rng.gen::<f64>() * total;
         let k = self.cdf.partition_point(|&c| c <= x).min(self.prims.len() - 1);
         let prim = self.prims[k];
         let (r1, r2) = (rng.gen::<f32>().sqrt(), rng.gen::<f32>());
         let (u, v) = (r1 * (1.0 - r2), r1 * r2);
-        Some((self.mesh.point(prim, u, v), self.mesh.normal(prim)?))
+        let (p, err) = self.mesh.point_and_error(prim, u, v);
+        Some((p, self.mesh.normal(prim)?, err))
     }
 }
 
@@ -172,7 +174,7 @@ pub fn generate_rays(
         }
         for _ in 0..count {
             let ray = match kind {
-                RayKind::Surface => surf.sample(&mut rng).map(|(p, n)| {
+                RayKind::Surface => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
                     let (t, b) = basis(n);
                     let (r1, r2) = (rng.gen::<f32>(), rng.gen::<f32>());
@@ -181,22 +183,22 @@ pub fn generate_rays(
                     let sin = (1.0 - cos * cos).max(0.0).sqrt();
                     let phi = std::f32::consts::TAU * r2;
                     let dir = sin * phi.cos() * t + sin * phi.sin() * b + cos * n;
-                    Ray::new(offset_ray_origin(p, n), dir)
+                    Ray::new(offset_ray_origin(p, err, n), dir)
                 }),
-                RayKind::Grazing => surf.sample(&mut rng).map(|(p, n)| {
+                RayKind::Grazing => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
                     let (t, b) = basis(n);
                     let phi = std::f32::consts::TAU * rng.gen::<f32>();
                     // Log-uniform elevation between 0.01° and 1°.
                     let elev = (0.01f32 * 100f32.powf(rng.gen::<f32>())).to_radians();
                     let tangent = phi.cos() * t + phi.sin() * b;
-                    Ray::new(offset_ray_origin(p, n), elev.cos() * tangent + elev.sin() * n)
+                    Ray::new(offset_ray_origin(p, err, n), elev.cos() * tangent + elev.sin() * n)
                 }),
                 RayKind::Shadow => {
-                    surf.sample(&mut rng).zip(surf.sample(&mut rng)).and_then(|((p, np), (q, nq))| {
+                    surf.sample(&mut rng).zip(surf.sample(&mut rng)).and_then(|((p, np, ep), (q, nq, eq))| {
                         let d = q - p;
-                        let o = offset_ray_origin(p, if np.dot(d) >= 0.0 { np } else { -np });
-                        let e = offset_ray_origin(q, if nq.dot(d) <= 0.0 { nq } else { -nq });
+                        let o = offset_ray_origin(p, ep, if np.dot(d) >= 0.0 { np } else { -np });
+                        let e = offset_ray_origin(q, eq, if nq.dot(d) <= 0.0 { nq } else { -nq });
                         let dir = e - o;
                         (dir != Vec3::ZERO).then(|| Ray::segment(o, dir, 0.0, 0.999))
                     })

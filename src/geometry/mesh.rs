@@ -80,6 +80,14 @@ impl TriangleMesh {
         (1.0 - u - v) * a + u * b + v * c
     }
 
+    /// Point at barycentrics `(u, v)` and a conservative bound on its rounding error.
+    #[inline]
+    pub fn point_and_error(&self, i: u32, u: f32, v: f32) -> (Vec3, Vec3) {
+        let t = self.triangle(i);
+        let b = [1.0 - u - v, u, v];
+        (b[0] * t[0] + b[1] * t[1] + b[2] * t[2], super::barycentric_error(t, b))
+    }
+
     pub fn bounds(&self) -> Aabb {
         self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &v| b.grow(self.positions[v as usize]))
     }

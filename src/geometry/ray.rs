@@ -30,28 +30,64 @@ impl Ray {
     }
 }
 
-const ORIGIN: f32 = 1.0 / 32.0;
-const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-const INT_SCALE: f32 = 256.0;
-
-/// Moves `p`, a point computed on a surface with geometric normal `n`, off that surface to the
-/// side `n` points to (Wächter & Binder 2019). Flip `n` to leave on the other side.
-///
-/// Each coordinate is moved by `INT_SCALE * n` ULPs, so the offset grows with the magnitude of
-/// the coordinate; near zero, where ULPs become tiny, a small absolute offset is used instead.
+/// `gamma(n) = n u / (1 - n u)` with `u = 2^-24`: the relative error bound of `n` rounded float
+/// operations (Higham; pbrt's `gamma`).
 #[inline]
-pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    #[inline]
-    fn one(p: f32, n: f32) -> f32 {
-        if p.abs() < ORIGIN {
-            return p + FLOAT_SCALE * n;
+pub const fn gamma(n: i32) -> f32 {
+    let u = f32::EPSILON * 0.5;
+    n as f32 * u / (1.0 - n as f32 * u)
+}
+
+/// Rounding-error bound of a point interpolated from triangle corners `v` with barycentrics
+/// `b`: pbrt-v4's `gamma(7) (|b0 v0| + |b1 v1| + |b2 v2|)`. Any barycentrics give a point in
+/// the triangle's plane, so the bound holds whichever intersector (Embree or the BVH) computed
+/// them; their own error only moves the point within the plane.
+#[inline]
+pub fn barycentric_error(v: [Vec3; 3], b: [f32; 3]) -> Vec3 {
+    gamma(7) * ((b[0] * v[0]).abs() + (b[1] * v[1]).abs() + (b[2] * v[2]).abs())
+}
+
+/// Moves `p`, a point on a surface with unit normal `n` and absolute error bound `err`, off the
+/// surface to the side `n` points to (pbrt-v4 `OffsetRayOrigin`, Pharr, Jakob & Humphreys,
+/// *Physically Based Rendering*, 4th ed., 6.8.6): by `|n| . err` along `n`, then each moved
+/// coordinate rounded one more float away, so the new origin is certainly on that side of the
+/// true surface. The offset scales with the coordinates' magnitude, so it works the same at any
+/// world scale and any distance from the origin. Flip `n` to leave on the other side.
+///
+/// The move is at least `gamma(7) max|p|`: where the error bound vanishes (a point exactly on
+/// the plane x = 0) an intersector's own rounding, proportional to the coordinates, could
+/// still report the surface it leaves; Embree has no conservative `t` bound to reject it.
+#[inline]
+pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
+    let d = n.abs().dot(err).max(gamma(7) * p.abs().max_element());
+    let offset = d * n;
+    let mut po = p + offset;
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = next_float_up(po[i]);
+        } else if offset[i] < 0.0 {
+            po[i] = next_float_down(po[i]);
         }
-        let of_i = (INT_SCALE * n) as i32;
-        let bits = p.to_bits() as i32;
-        let moved = if p < 0.0 { bits - of_i } else { bits + of_i };
-        f32::from_bits(moved as u32)
     }
-    Vec3::new(one(p.x, n.x), one(p.y, n.y), one(p.z, n.z))
+    po
+}
+
+/// The smallest float greater than `v` (infinity and NaN unchanged; -0 goes to the smallest
+/// positive subnormal).
+#[inline]
+pub fn next_float_up(v: f32) -> f32 {
+    if v.is_infinite() && v > 0.0 || v.is_nan() {
+        return v;
+    }
+    let v = if v == -0.0 { 0.0 } else { v };
+    let bits = v.to_bits();
+    f32::from_bits(if v >= 0.0 { bits + 1 } else { bits - 1 })
+}
+
+/// The largest float smaller than `v`.
+#[inline]
+pub fn next_float_down(v: f32) -> f32 {
+    -next_float_up(-v)
 }
 
 #[cfg(test)]
@@ -59,16 +95,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn offset_moves_to_the_normal_side_at_every_scale() {
+    fn offset_clears_the_error_bound_at_every_scale_and_position() {
         for scale in [1e-4f32, 1e-2, 1.0, 1e3, 1e5] {
-            for n in [Vec3::X, -Vec3::Y, Vec3::new(0.6, 0.0, 0.8), Vec3::new(-0.3, 0.9, -0.3).normalize()] {
-                let p = Vec3::new(0.3, -0.7, 0.5) * scale;
-                let q = offset_ray_origin(p, n);
-                assert!((q - p).dot(n) > 0.0, "scale {scale} n {n}: {p} -> {q}");
-                // The move is tiny relative to the coordinates.
-                assert!((q - p).length() <= 1e-3 * scale.max(1.0), "scale {scale}: {p} -> {q}");
+            for shift in [0.0f32, 1e5] {
+                let v = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0)]
+                    .map(|c| c * scale + Vec3::splat(shift));
+                for b in [[0.2f32, 0.3, 0.5], [1.0, 0.0, 0.0], [0.001, 0.001, 0.998]] {
+                    let p = b[0] * v[0] + b[1] * v[1] + b[2] * v[2];
+                    let err = barycentric_error(v, b);
+                    for n in [Vec3::Y, -Vec3::Y] {
+                        let q = offset_ray_origin(p, err, n);
+                        // The plane is y = shift: the new origin is strictly on the n side.
+                        assert!((q.y - shift) * n.y > 0.0, "scale {scale} shift {shift}: {p} -> {q}");
+                        // And close: within a few error bounds.
+                        assert!(
+                            (q - p).length()
+                                <= 4.0 * err.length() + 4.0 * f32::EPSILON * p.abs().max_element()
+                        );
+                    }
+                }
             }
         }
+    }
+
+    #[test]
+    fn next_float() {
+        assert!(next_float_up(1.0) > 1.0 && next_float_down(1.0) < 1.0);
+        assert!(next_float_up(-0.0) > 0.0 && next_float_down(0.0) < 0.0);
+        assert_eq!(next_float_up(f32::INFINITY), f32::INFINITY);
+        assert!(next_float_up(-1.0) > -1.0);
     }
 
     #[test]

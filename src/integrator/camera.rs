@@ -26,10 +26,20 @@ pub struct Scratch {
 #[derive(Clone, Copy, Debug)]
 pub struct SurfaceHit {
     pub p: Vec3,
+    /// Bound on the rounding error of `p`, for robust ray origins.
+    pub err: Vec3,
     /// Unit geometric normal (front side as wound).
     pub n: Vec3,
     pub prim: u32,
     pub t: f32,
+}
+
+impl SurfaceHit {
+    /// A robust origin for a ray leaving this point toward `w`.
+    #[inline]
+    pub fn spawn(&self, w: Vec3) -> Vec3 {
+        offset_ray_origin(self.p, self.err, face_forward(self.n, w))
+    }
 }
 
 impl<A: Accel> Shared<'_, A> {
@@ -39,8 +49,8 @@ impl<A: Accel> Shared<'_, A> {
     pub fn trace(&self, ray: &Ray) -> Option<SurfaceHit> {
         let hit = self.accel.intersect(ray)?;
         let n = self.scene.mesh.normal(hit.prim)?;
-        let p = self.scene.mesh.point(hit.prim, hit.u, hit.v);
-        Some(SurfaceHit { p, n, prim: hit.prim, t: hit.t })
+        let (p, err) = self.scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
+        Some(SurfaceHit { p, err, n, prim: hit.prim, t: hit.t })
     }
 
     /// Mean radiance of the samples of pixel `(px, py)`.
@@ -100,7 +110,7 @@ impl<A: Accel> Shared<'_, A> {
                 if beta.max_element() <= 0.0 {
                     break;
                 }
-                ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, s.wi)), s.wi);
+                ray = Ray::new(hit.spawn(s.wi), s.wi);
                 continue;
             }
             l += beta * self.shade(&hit, wo, m, rng, scratch, c);
@@ -191,7 +201,7 @@ impl<A: Accel> Shared<'_, A> {
         for _ in 0..n_rays {
             let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
             let mut beta = s.weight(hit.n);
-            let mut ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, s.wi)), s.wi);
+            let mut ray = Ray::new(hit.spawn(s.wi), s.wi);
             for depth in 0..=self.cfg.max_depth {
                 c.rays.gather += 1;
                 let Some(y) = self.trace(&ray) else { break };
@@ -203,7 +213,7 @@ impl<A: Accel> Shared<'_, A> {
                     }
                     let Some(s) = my.sample(y.n, wy, rng.gen(), [rng.gen(), rng.gen()]) else { break };
                     beta *= s.weight(y.n);
-                    ray = Ray::new(offset_ray_origin(y.p, face_forward(y.n, s.wi)), s.wi);
+                    ray = Ray::new(y.spawn(s.wi), s.wi);
                     continue;
                 }
                 let ly = if let Some(e) = self.cached_irradiance(&y, wy, my, scratch, c) {

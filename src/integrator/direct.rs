@@ -8,8 +8,8 @@
 use super::camera::SurfaceHit;
 use super::{Counters, Shared};
 use crate::accel::Accel;
-use crate::geometry::{offset_ray_origin, Ray};
-use crate::material::{face_forward, Material};
+use crate::geometry::Ray;
+use crate::material::Material;
 use crate::sampling::power_heuristic;
 use glam::Vec3;
 use rand::Rng;
@@ -23,7 +23,7 @@ pub const SHADOW_MARGIN: f32 = 1e-4;
 #[inline]
 pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, wi: Vec3, dist: f32, c: &mut Counters) -> bool {
     c.rays.shadow += 1;
-    let origin = offset_ray_origin(hit.p, face_forward(hit.n, wi));
+    let origin = hit.spawn(wi);
     let t_max = if dist.is_finite() { dist * (1.0 - SHADOW_MARGIN) } else { f32::INFINITY };
     !s.accel.occluded(&Ray::segment(origin, wi, 0.0, t_max))
 }
@@ -65,7 +65,7 @@ pub fn direct_light<A: Accel>(
                 continue;
             }
             c.rays.shadow += 1;
-            let ray = Ray::new(offset_ray_origin(hit.p, face_forward(hit.n, bs.wi)), bs.wi);
+            let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
             let Some(y) = s.trace(&ray) else { continue };
             let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
             if le == Vec3::ZERO {

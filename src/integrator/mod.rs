@@ -242,15 +242,23 @@ pub fn render<A: Accel>(
                 cache: &empty,
             };
             let white = crate::material::Material::Diffuse { kd: Vec3::ONE };
-            let direct = |i: usize, p: Vec3, n: Vec3| {
+            let direct = |i: usize, site: &irradiance::SitePoint| {
                 if cfg.indirect != crate::config::IndirectMode::FinalGather {
                     return Vec3::ZERO; // only final gathering reads it
                 }
                 let mut rng = Pcg32::seed_from_u64(trace::mix(cfg.seed, 0xD12EC7, i as u64));
                 let mut c = Counters::default();
-                let hit = camera::SurfaceHit { p, n, prim: 0, t: 0.0 };
+                let hit = camera::SurfaceHit { p: site.pos, err: site.err, n: site.n, prim: 0, t: 0.0 };
                 std::f32::consts::PI
-                    * direct::direct_light(&shared, &hit, n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c)
+                    * direct::direct_light(
+                        &shared,
+                        &hit,
+                        site.n,
+                        &white,
+                        SITE_LIGHT_SAMPLES,
+                        &mut rng,
+                        &mut c,
+                    )
             };
             IrradianceCache::build(sites, &maps.indirect, &maps.caustic, &gather, &caustic_gather, direct)
         });

@@ -8,7 +8,7 @@
 //! a solid-angle density `pdf_A d^2 / cos(theta_light)` for direct lighting.
 
 use super::{luminance, EmissionSample, LightSample};
-use crate::geometry::{offset_ray_origin, TriangleMesh};
+use crate::geometry::{barycentric_error, offset_ray_origin, TriangleMesh};
 use crate::material::Material;
 use crate::sampling::{
     cosine_hemisphere_pdf, sample_cosine_hemisphere, sample_uniform_triangle, Distribution1D, Frame,
@@ -36,9 +36,14 @@ impl EmitterTriangle {
     }
 
     fn point(&self, u: [f32; 2]) -> Vec3 {
-        let [b0, b1, b2] = sample_uniform_triangle(u);
-        let [a, b, c] = self.vertices;
-        b0 * a + b1 * b + b2 * c
+        self.point_and_error(u).0
+    }
+
+    /// A uniform point and the bound on its rounding error.
+    fn point_and_error(&self, u: [f32; 2]) -> (Vec3, Vec3) {
+        let b = sample_uniform_triangle(u);
+        let [v0, v1, v2] = self.vertices;
+        (b[0] * v0 + b[1] * v1 + b[2] * v2, barycentric_error(self.vertices, b))
     }
 }
 
@@ -152,14 +157,14 @@ impl AreaLights {
         u_dir: [f32; 2],
     ) -> Option<EmissionSample> {
         let tri = self.triangles.get(i)?;
-        let p = tri.point(u_pos);
+        let (p, err) = tri.point_and_error(u_pos);
         let local = sample_cosine_hemisphere(u_dir);
         if local.z <= 0.0 {
             return None;
         }
         let dir = Frame::from_z(tri.normal).from_local(local).normalize();
         Some(EmissionSample {
-            ray_origin: offset_ray_origin(p, tri.normal),
+            ray_origin: offset_ray_origin(p, err, tri.normal),
             dir,
             normal: Some(tri.normal),
             pdf_pos: 1.0 / tri.area,

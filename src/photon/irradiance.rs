@@ -56,33 +56,47 @@ pub struct IrradianceCache {
     max_radius: f32,
 }
 
-/// Every `stride`-th photon of each map, as (position, normal) sites.
-pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<(Vec3, Vec3)> {
-    maps.iter().flat_map(|hits| hits.iter().step_by(stride.max(1)).map(|h| (h.pos, h.n))).collect()
+/// A place where irradiance is precomputed: a photon's position, its error bound and the
+/// normal on the side it arrived from.
+#[derive(Clone, Copy, Debug)]
+pub struct SitePoint {
+    pub pos: Vec3,
+    pub err: Vec3,
+    pub n: Vec3,
+}
+
+/// Every `stride`-th photon of each map, as sites.
+pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<SitePoint> {
+    maps.iter()
+        .flat_map(|hits| {
+            hits.iter().step_by(stride.max(1)).map(|h| SitePoint { pos: h.pos, err: h.err, n: h.n })
+        })
+        .collect()
 }
 
 impl IrradianceCache {
     /// Estimates the irradiance at each site (in parallel) and indexes the sites: indirect and
-    /// caustic from the maps, direct from `direct(site_index, position, normal)`.
+    /// caustic from the maps, direct from `direct(site_index, site)`.
     pub fn build(
-        sites: Vec<(Vec3, Vec3)>,
+        sites: Vec<SitePoint>,
         indirect: &[PhotonMap],
         caustic: &[PhotonMap],
         gather: &GatherParams,
         caustic_gather: &GatherParams,
-        direct: impl Fn(usize, Vec3, Vec3) -> Vec3 + Sync,
+        direct: impl Fn(usize, &SitePoint) -> Vec3 + Sync,
     ) -> Self {
         let sites: Vec<Site> = sites
             .into_par_iter()
             .enumerate()
-            .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, (pos, n))| {
+            .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, site)| {
+                let (pos, n) = (site.pos, site.n);
                 let e_ind: Vec3 = indirect.iter().map(|m| m.irradiance(pos, n, gather, scratch)).sum();
                 let e_caus: Vec3 =
                     caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
                 Site {
                     pos: pos.to_array(),
                     normal: pack::encode_dir_oct(n),
-                    direct: pack::rgb9e5_encode(direct(i, pos, n)),
+                    direct: pack::rgb9e5_encode(direct(i, &site)),
                     indirect: pack::rgb9e5_encode(e_ind),
                     caustic: pack::rgb9e5_encode(e_caus),
                 }

@@ -44,6 +44,8 @@ pub struct PhotonHit {
     /// Unit surface normal on the side the photon arrived from (not stored in the map; used to
     /// place precomputed irradiance).
     pub n: Vec3,
+    /// Bound on the rounding error of `pos` (not stored either).
+    pub err: Vec3,
     /// Unit direction back toward where the photon came from.
     pub wi: Vec3,
     pub power: Vec3,
@@ -196,6 +198,7 @@ impl PhotonMap {
         self.tree.items().iter().map(|p| PhotonHit {
             pos: p.position(),
             n: Vec3::ZERO,
+            err: Vec3::ZERO,
             wi: pack::decode_dir_oct(p.dir),
             power: self.power(p),
         })
@@ -276,6 +279,7 @@ mod tests {
             .map(|_| PhotonHit {
                 pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
                 n: Vec3::Y,
+                err: Vec3::ZERO,
                 wi: Vec3::new(0.3, 0.9, 0.1).normalize(),
                 power: Vec3::splat(power_each),
             })

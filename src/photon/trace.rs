@@ -280,20 +280,20 @@ fn trace_photon<A: Accel>(
         rays += 1;
         let Some(hit) = accel.intersect(&ray) else { break };
         let Some(n) = scene.mesh.normal(hit.prim) else { break };
-        let p = scene.mesh.point(hit.prim, hit.u, hit.v);
+        let (p, err) = scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
         let m = scene.material(hit.prim);
         let wo = -ray.dir.normalize();
         if m.is_diffuse_like() {
             match pass {
                 Pass::Caustic => {
                     if bounce > 0 && specular_only {
-                        out.push(PhotonHit { pos: p, n: face_forward(n, wo), wi: wo, power });
+                        out.push(PhotonHit { pos: p, err, n: face_forward(n, wo), wi: wo, power });
                     }
                     break;
                 }
                 Pass::Indirect => {
                     if !specular_only {
-                        out.push(PhotonHit { pos: p, n: face_forward(n, wo), wi: wo, power });
+                        out.push(PhotonHit { pos: p, err, n: face_forward(n, wo), wi: wo, power });
                     }
                 }
             }
@@ -310,7 +310,7 @@ fn trace_photon<A: Accel>(
             specular_only = false;
         }
         power = s.power;
-        ray = Ray::new(offset_ray_origin(p, face_forward(n, s.wi)), s.wi);
+        ray = Ray::new(offset_ray_origin(p, err, face_forward(n, s.wi)), s.wi);
     }
     rays
 }
