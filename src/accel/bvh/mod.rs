@@ -35,10 +35,12 @@ use node::{leaf_range, EMPTY, LEAF};
 use rayon::prelude::*;
 
 /// The binary build keeps its depth below `64 + 32`; every 4-wide level consumes at least one
-/// binary level and pushes at most three children.
+/// binary level (and pushes at most three children).
 const MAX_DEPTH: usize = 96;
-/// Traversal stack capacity.
-const STACK: usize = 3 * MAX_DEPTH;
+/// Traversal stack entries kept on the machine stack; deeper entries spill into a `Vec`.
+/// (A fixed array for the worst case, `3 * MAX_DEPTH` entries, cost 7% of the incoherent-ray
+/// time just in zeroing it per ray; realistic trees never need more than a few dozen.)
+const STACK: usize = 64;
 
 /// `1 + 2 γ₃` with `γₙ = n ε / (1 - n ε)`, `ε = 2⁻²⁴`: the conservative scale of exit distances.
 const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -259,6 +261,7 @@ impl Bvh {
         let nodes = &self.nodes[..];
         // Child references and their entry distances.
         let mut stack = [(0u32, 0f32); STACK];
+        let mut spill: Vec<(u32, f32)> = Vec::new(); // allocates only if `stack` overflows
         let mut sp = 0usize;
         let mut cur = 0u32; // the root
         'walk: loop {
@@ -288,8 +291,14 @@ impl Bvh {
                         hits[j] = e;
                         n += 1;
                     }
-                    stack[sp..sp + n - 1].copy_from_slice(&hits[..n - 1]);
-                    sp += n - 1;
+                    for &e in &hits[..n - 1] {
+                        if sp < STACK {
+                            stack[sp] = e;
+                            sp += 1;
+                        } else {
+                            spill.push(e);
+                        }
+                    }
                     cur = hits[n - 1].0;
                     continue 'walk;
                 }
@@ -305,11 +314,14 @@ impl Bvh {
             }
             // Pop the next subtree that may still hold something closer than `t_max`.
             loop {
-                if sp == 0 {
+                let (e, t_near) = if let Some(e) = spill.pop() {
+                    e
+                } else if sp > 0 {
+                    sp -= 1;
+                    stack[sp]
+                } else {
                     return;
-                }
-                sp -= 1;
-                let (e, t_near) = stack[sp];
+                };
                 if !(t_near > t_max * EXIT_SCALE) {
                     cur = e;
                     continue 'walk;
