@@ -1,16 +1,20 @@
 //! A pure-Rust bounding volume hierarchy over triangles.
 //!
 //! * **Build** ([`build`]): binned SAH after Wald, "On fast Construction of SAH-based Bounding
-//!   Volume Hierarchies" (IEEE RT 2007), parallel over subtrees with rayon, flattened into
-//!   32-byte [`Node`]s. Siblings are stored together as a 64-byte [`NodePair`] (one cache line,
-//!   so both children are tested with one fetch); pairs are in depth-first order.
-//!   Triangles are copied into leaf order as vertex triples, so a leaf's triangles are contiguous
-//!   in memory; their original indices are kept for [`Hit::prim`]. Triangles of zero area (or
-//!   with non-finite corners) are left out: they can never be hit.
-//! * **Traversal**: a stack-based ordered walk. Both children of an interior node are tested
-//!   together, the nearer (by entry distance) is visited first and the farther pushed with its
-//!   entry distance, so it is skipped once a closer hit is found. Occlusion queries return at the
-//!   first hit.
+//!   Volume Hierarchies" (IEEE RT 2007), parallel over subtrees with rayon, giving a binary
+//!   tree that is then collapsed into 4-wide [`Node4`]s (each node repeatedly opens its child of
+//!   largest surface area until it has four children), stored depth first. A node holds its
+//!   four children's boxes in structure-of-arrays layout (`[Vec4; 2]` per axis, 128 bytes), so
+//!   one ray is tested against all four boxes with 4-wide SSE operations.
+//!   Leaf triangles are copied, in leaf order, into [`Tri4`] packets of four (structure of
+//!   arrays; a leaf's last packet is padded by repeating its last triangle), with their
+//!   original indices kept for [`Hit::prim`]. Triangles of zero area (or with non-finite
+//!   corners) are left out: they can never be hit.
+//! * **Traversal**: a stack-based ordered walk. The four children of a node are tested
+//!   together; the children hit are sorted by entry distance, the nearest is visited next and
+//!   the others are pushed with their entry distance, so they are skipped once a closer hit is
+//!   found. The stack lives in a small array that spills into a `Vec` in (never seen) very deep
+//!   trees. Occlusion queries return at the first hit.
 //! * **Robust box test**: the slab test uses precomputed reciprocals (`1/0 = +inf` after
 //!   normalising `-0`), picks near/far planes from the direction's sign, ignores the NaN of
 //!   `0 * inf` (origin exactly on a slab plane of a zero direction component, where the ray lies
@@ -18,8 +22,10 @@
 //!   (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013; pbrt-v3 §3.9.2) so that rounding never
 //!   culls a box the ray truly enters.
 //! * **Triangles**: the watertight test of Woop, Benthin and Wald, "Watertight Ray/Triangle
-//!   Intersection" (JCGT 2(1), 2013), shared with the other backends in
-//!   [`triangle`](super::triangle), so results agree bit for bit with [`Naive`](super::naive::Naive).
+//!   Intersection" (JCGT 2(1), 2013), run on four triangles at once by
+//!   [`WatertightRay::intersect4`], which performs the scalar test's operations in the same order
+//!   lane by lane, so results agree bit for bit with [`Naive`](super::naive::Naive) (which uses
+//!   the scalar [`WatertightRay::intersect`]).
 
 mod build;
 mod node;

@@ -21,8 +21,8 @@ pub const MAX_FIRST_PACKET: u32 = 1 << (31 - PACKET_BITS);
 /// An unused child slot.
 pub const EMPTY: u32 = u32::MAX;
 
-/// One 4-wide node; see the [module docs](self). A child reference is the index of an interior
-/// node, a leaf reference (bit [`LEAF`]) or [`EMPTY`].
+/// One 4-wide node: the four children's boxes and references. A child reference is the index of an interior
+/// node, a leaf reference (bit 31 set) or `u32::MAX` for an unused slot.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 pub struct Node4 {
