@@ -1,6 +1,6 @@
 //! A pure-Rust bounding volume hierarchy over triangles.
 //!
-//! * **Build** ([`build`]): binned SAH after Wald, "On fast Construction of SAH-based Bounding
+//! * **Build** (`build.rs`): binned SAH after Wald, "On fast Construction of SAH-based Bounding
 //!   Volume Hierarchies" (IEEE RT 2007), parallel over subtrees with rayon, giving a binary
 //!   tree that is then collapsed into 4-wide [`Node4`]s (each node repeatedly opens its child of
 //!   largest surface area until it has four children), stored depth first. A node holds its
