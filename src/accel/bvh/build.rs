@@ -10,14 +10,15 @@
 //! Large subtrees are built in parallel with `rayon::join`, and the binning of very large nodes
 //! (the top of the tree, where there is little subtree parallelism) is split into chunks.
 
-use super::node::{Node, NodePair};
+use super::node::{leaf_ref, Node4};
 use glam::Vec3A;
 use rayon::prelude::*;
 
 /// Number of centroid bins per axis.
 const BINS: usize = 32;
-/// SAH cost of visiting a node (testing both children), relative to one triangle test; tuned
-/// on incoherent rays (1.0: 0.7, 2.0: 0.9, 3.0: 1.2 M rays/s).
+/// SAH cost of visiting a (binary) node, relative to one triangle test; tuned
+/// on incoherent rays with the binary BVH (1.0: 0.7, 2.0: 0.9, 3.0: 1.2 M rays/s); with the 4-wide
+/// BVH, 3, 4 and 5 measured within noise of each other (2.7-2.9 M rays/s).
 const TRAVERSAL_COST: f32 = 3.0;
 /// Leaves never hold more triangles than this (unless centroids coincide and the median split
 /// also cannot separate them, which it always can).
@@ -215,7 +216,7 @@ fn partition(prims: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
 /// The build's intermediate tree, flattened afterwards into depth-first order.
 enum Tmp {
     Leaf { bounds: Box3, first: u32, count: u32 },
-    Inner { bounds: Box3, axis: u32, kids: Box<(Tmp, Tmp)> },
+    Inner { bounds: Box3, kids: Box<(Tmp, Tmp)> },
 }
 
 fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
@@ -226,14 +227,13 @@ fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
         return leaf();
     }
     let split = if depth < SAH_DEPTH { best_split(prims, &bounds, &cbounds) } else { None };
-    let (mid, axis) = match split {
+    let mid = match split {
         Some((axis, bin, rel_cost, binner)) => {
             // Leaf cost n (one test per triangle) against traversal plus the expected tests.
             if n <= MAX_LEAF && (n as f32) <= TRAVERSAL_COST + rel_cost {
                 return leaf();
             }
-            let mid = partition(prims, |p| binner.bins(p.centroid2())[axis] <= bin);
-            (mid, axis)
+            partition(prims, |p| binner.bins(p.centroid2())[axis] <= bin)
         }
         None => {
             if n <= MAX_LEAF && depth < SAH_DEPTH {
@@ -249,7 +249,7 @@ fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
                 2
             };
             prims.select_nth_unstable_by(n / 2, |a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
-            (n / 2, axis)
+            n / 2
         }
     };
     debug_assert!(mid > 0 && mid < n, "a split leaves both sides non-empty");
@@ -260,38 +260,80 @@ fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
     } else {
         (build_rec(l, first, depth + 1), build_rec(r, rfirst, depth + 1))
     };
-    Tmp::Inner { bounds, axis: axis as u32, kids: Box::new(kids) }
+    Tmp::Inner { bounds, kids: Box::new(kids) }
 }
 
-/// Lays out the children of a node as the pair `pi`, then their subtrees depth first.
-fn flatten_pair(pi: usize, kids: (Tmp, Tmp), pairs: &mut Vec<NodePair>) {
-    for (slot, t) in [kids.0, kids.1].into_iter().enumerate() {
-        pairs[pi].0[slot] = match t {
-            Tmp::Leaf { bounds, first, count } => Node::leaf(bounds.to_aabb(), first, count),
-            Tmp::Inner { bounds, axis, kids } => {
-                let ci = pairs.len();
-                pairs.push(NodePair::default());
-                flatten_pair(ci, *kids, pairs);
-                Node::interior(bounds.to_aabb(), ci as u32, axis)
-            }
-        };
+impl Tmp {
+    fn bounds(&self) -> &Box3 {
+        match self {
+            Tmp::Leaf { bounds, .. } | Tmp::Inner { bounds, .. } => bounds,
+        }
     }
 }
 
-/// Builds the tree over `prims`, reordering them into leaf order: the root and the sibling
-/// pairs below it (`None` for no primitives).
-pub fn build(prims: &mut [PrimRef]) -> Option<(Node, Vec<NodePair>)> {
+/// The flattened tree: 4-wide nodes in depth-first order (the root first) and the leaves'
+/// packets of up to four triangles, as original triangle indices (padded by repeating the
+/// packet's last triangle).
+pub struct Flat {
+    pub nodes: Vec<Node4>,
+    pub packets: Vec<[u32; 4]>,
+}
+
+/// Collapses the binary tree into 4-wide nodes: a node's children are found by repeatedly
+/// opening the interior child of largest surface area until there are four (or only leaves).
+/// Every 4-wide level consumes at least one binary level, so the depth does not grow.
+fn fill(ni: usize, mut kids: Vec<Tmp>, prims: &[PrimRef], flat: &mut Flat) {
+    while kids.len() < 4 {
+        let widest = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| matches!(k, Tmp::Inner { .. }))
+            .max_by(|a, b| a.1.bounds().half_area().total_cmp(&b.1.bounds().half_area()))
+            .map(|(i, _)| i);
+        let Some(i) = widest else { break };
+        let Tmp::Inner { kids: k, .. } = kids.swap_remove(i) else { unreachable!("filtered above") };
+        let (l, r) = *k;
+        kids.push(l);
+        kids.push(r);
+    }
+    for (slot, k) in kids.into_iter().enumerate() {
+        match k {
+            Tmp::Leaf { bounds, first, count } => {
+                let p0 = flat.packets.len();
+                let tris = &prims[first as usize..(first + count) as usize];
+                for c in tris.chunks(4) {
+                    flat.packets.push(std::array::from_fn(|i| c[i.min(c.len() - 1)].id));
+                }
+                let r = leaf_ref(p0 as u32, (flat.packets.len() - p0) as u32);
+                flat.nodes[ni].set(slot, bounds.to_aabb(), r);
+            }
+            Tmp::Inner { bounds, kids, .. } => {
+                let ci = flat.nodes.len();
+                flat.nodes.push(Node4::default());
+                let (l, r) = *kids;
+                fill(ci, vec![l, r], prims, flat);
+                flat.nodes[ni].set(slot, bounds.to_aabb(), ci as u32);
+            }
+        }
+    }
+}
+
+/// Builds the tree over `prims`, reordering them into leaf order (`None` for no primitives).
+pub fn build(prims: &mut [PrimRef]) -> Option<Flat> {
     if prims.is_empty() {
         return None;
     }
-    let mut pairs = Vec::with_capacity(prims.len() / 2);
-    let root = match build_rec(prims, 0, 0) {
-        Tmp::Leaf { bounds, first, count } => Node::leaf(bounds.to_aabb(), first, count),
-        Tmp::Inner { bounds, axis, kids } => {
-            pairs.push(NodePair::default());
-            flatten_pair(0, *kids, &mut pairs);
-            Node::interior(bounds.to_aabb(), 0, axis)
+    let tree = build_rec(prims, 0, 0);
+    let mut flat =
+        Flat { nodes: Vec::with_capacity(prims.len() / 4), packets: Vec::with_capacity(prims.len() / 3) };
+    flat.nodes.push(Node4::default());
+    let kids = match tree {
+        leaf @ Tmp::Leaf { .. } => vec![leaf],
+        Tmp::Inner { kids, .. } => {
+            let (l, r) = *kids;
+            vec![l, r]
         }
     };
-    Some((root, pairs))
+    fill(0, kids, prims, &mut flat);
+    Some(flat)
 }

@@ -1,87 +1,72 @@
-//! The flattened node of the BVH: 32 bytes, two siblings per 64-byte cache line.
+//! The flattened node of the BVH: four children's boxes in structure-of-arrays layout, 128
+//! bytes (two cache lines).
 //!
-//! The two children of an interior node are stored side by side as a [`NodePair`] aligned to a
-//! cache line, so the traversal tests both with a single memory fetch; pairs are laid out in
-//! depth-first order. An interior node stores the index of its children's pair, a leaf the
-//! range of its triangles in the leaf-ordered triangle array.
+//! `bounds[axis][0]` holds the four children's minima along `axis`, one per lane, and
+//! `bounds[axis][1]` their maxima, so one ray is tested against all four boxes with a handful
+//! of 4-wide SIMD operations. Unused slots have empty bounds (`+inf` minima, `-inf` maxima),
+//! which every ray misses, and the child [`EMPTY`].
 
 use crate::geometry::Aabb;
-use glam::{Vec3, Vec3A};
+use glam::{Vec3, Vec4};
 
-/// Number of bits of `meta` holding the split axis; the rest holds the leaf's triangle count.
-const AXIS_BITS: u32 = 2;
+/// Set in a child reference to a leaf: `LEAF | first_packet << PACKET_BITS | (packets - 1)`.
+pub const LEAF: u32 = 1 << 31;
+/// Low bits of a leaf reference holding its number of [`Tri4`](crate::accel::triangle::Tri4)
+/// packets minus one.
+pub const PACKET_BITS: u32 = 3;
+/// Most packets a leaf may have.
+pub const MAX_PACKETS: u32 = 1 << PACKET_BITS;
+/// Packets are numbered below this.
+pub const MAX_FIRST_PACKET: u32 = 1 << (31 - PACKET_BITS);
+/// An unused child slot.
+pub const EMPTY: u32 = u32::MAX;
 
-/// One BVH node: bounds (`min`, `max`), then either the children's pair index (interior) or the
-/// first triangle (leaf), and `count << 2 | axis` (`count == 0` for an interior node).
-/// An interior node's `offset` is the index of its children's [`NodePair`].
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(32))]
-pub struct Node {
-    pub min: [f32; 3],
-    /// Interior: index of the children's [`NodePair`]. Leaf: index of the first triangle.
-    pub offset: u32,
-    pub max: [f32; 3],
-    /// `count << 2 | axis`; `count` is 0 for interior nodes.
-    pub meta: u32,
+/// One 4-wide node: the four children's boxes and references. A child reference is the index of an interior
+/// node, a leaf reference (bit 31 set) or `u32::MAX` for an unused slot.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(64))]
+pub struct Node4 {
+    pub bounds: [[Vec4; 2]; 3],
+    pub child: [u32; 4],
 }
 
-const _: () = assert!(std::mem::size_of::<Node>() == 32);
+const _: () = assert!(std::mem::size_of::<Node4>() == 128);
 
-/// The two children of an interior node, in one 64-byte cache line.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(64))]
-pub struct NodePair(pub [Node; 2]);
+impl Default for Node4 {
+    fn default() -> Self {
+        let empty = [Vec4::INFINITY, Vec4::NEG_INFINITY];
+        Node4 { bounds: [empty; 3], child: [EMPTY; 4] }
+    }
+}
 
-const _: () = assert!(std::mem::size_of::<NodePair>() == 64);
-
-impl Node {
-    /// A leaf over triangles `first .. first + count` (`count >= 1`).
-    pub fn leaf(bounds: Aabb, first: u32, count: u32) -> Self {
-        debug_assert!(count >= 1);
-        Node {
-            min: bounds.min.to_array(),
-            offset: first,
-            max: bounds.max.to_array(),
-            meta: count << AXIS_BITS,
+impl Node4 {
+    /// Sets child slot `i` to `child` with bounds `b`.
+    pub fn set(&mut self, i: usize, b: Aabb, child: u32) {
+        for (axis, [lo, hi]) in self.bounds.iter_mut().enumerate() {
+            lo[i] = b.min[axis];
+            hi[i] = b.max[axis];
         }
+        self.child[i] = child;
     }
 
-    /// An interior node whose children are the pair at index `pair`.
-    pub fn interior(bounds: Aabb, pair: u32, axis: u32) -> Self {
-        debug_assert!(axis < 3);
-        Node { min: bounds.min.to_array(), offset: pair, max: bounds.max.to_array(), meta: axis }
+    /// The bounds of child slot `i`.
+    pub fn child_bounds(&self, i: usize) -> Aabb {
+        let [x, y, z] = self.bounds;
+        Aabb { min: Vec3::new(x[0][i], y[0][i], z[0][i]), max: Vec3::new(x[1][i], y[1][i], z[1][i]) }
     }
+}
 
-    #[inline(always)]
-    pub fn is_leaf(&self) -> bool {
-        self.meta >> AXIS_BITS != 0
-    }
+/// A leaf reference over `packets` packets starting at `first`.
+pub fn leaf_ref(first: u32, packets: u32) -> u32 {
+    assert!(first < MAX_FIRST_PACKET, "too many triangles for the BVH's leaf references");
+    assert!((1..=MAX_PACKETS).contains(&packets));
+    LEAF | first << PACKET_BITS | (packets - 1)
+}
 
-    /// Triangle count of a leaf (0 for an interior node).
-    #[inline(always)]
-    pub fn count(&self) -> u32 {
-        self.meta >> AXIS_BITS
-    }
-
-    /// Split axis of an interior node.
-    #[inline(always)]
-    pub fn axis(&self) -> usize {
-        (self.meta & ((1 << AXIS_BITS) - 1)) as usize
-    }
-
-    #[inline(always)]
-    pub fn min_a(&self) -> Vec3A {
-        Vec3A::from_array(self.min)
-    }
-
-    #[inline(always)]
-    pub fn max_a(&self) -> Vec3A {
-        Vec3A::from_array(self.max)
-    }
-
-    pub fn bounds(&self) -> Aabb {
-        Aabb { min: Vec3::from_array(self.min), max: Vec3::from_array(self.max) }
-    }
+/// `(first packet, packet count)` of a leaf reference.
+#[inline(always)]
+pub fn leaf_range(r: u32) -> (usize, usize) {
+    (((r & !LEAF) >> PACKET_BITS) as usize, ((r & (MAX_PACKETS - 1)) + 1) as usize)
 }
 
 #[cfg(test)]
@@ -89,14 +74,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn packs_leaf_and_interior() {
+    fn packs_leaves_and_bounds() {
+        let r = leaf_ref(12345, 2);
+        assert!(r & LEAF != 0 && r != EMPTY);
+        assert_eq!(leaf_range(r), (12345, 2));
+        let mut n = Node4::default();
         let b = Aabb::from_points([Vec3::ZERO, Vec3::ONE]);
-        let l = Node::leaf(b, 7, 5);
-        assert!(l.is_leaf());
-        assert_eq!((l.offset, l.count()), (7, 5));
-        let i = Node::interior(b, 9, 2);
-        assert!(!i.is_leaf());
-        assert_eq!((i.offset, i.axis(), i.count()), (9, 2, 0));
-        assert_eq!(i.bounds(), b);
+        n.set(2, b, 9);
+        assert_eq!(n.child_bounds(2), b);
+        assert_eq!(n.child, [EMPTY, EMPTY, 9, EMPTY]);
+        assert!(n.child_bounds(0).is_empty());
     }
 }
