@@ -245,10 +245,10 @@ pub struct AgreeReport {
     pub rays: u64,
     /// One backend hit, the other missed, and the hit is not within rounding of an edge.
     pub hit_miss_disagreements: u64,
-    /// Differences (hit/miss or primitive) explained by a hit within [`TIE_ULPS`] ULPs (or
-    /// [`TIE_BARYCENTRIC`]) of an edge or vertex, or by two triangles hit at the same point up
-    /// to rounding (same distance, or coplanar and touching surfaces such as a block standing
-    /// on the floor).
+    /// Differences (hit/miss, primitive or occlusion) that rounding alone decides: a hit within
+    /// [`TIE_ULPS`] ULPs (or [`TIE_BARYCENTRIC`]) of an edge or vertex, two triangles hit at the
+    /// same point (coplanar and touching surfaces such as a block standing on the floor), or a
+    /// ray starting or ending within rounding distance of the plane of the triangle it hits.
     pub edge_ties: u64,
     /// Both hit, different triangles, not a tie.
     pub primitive_disagreements: u64,
@@ -300,12 +300,36 @@ fn same_point(mesh: &TriangleMesh, a: &Hit, b: &Hit) -> bool {
     (pa - pb).length() <= TIE_ULPS * f32::EPSILON * magnitude
 }
 
+/// Whether `x` lies within rounding distance of the plane of the triangle `hit` is on.
+fn near_plane(mesh: &TriangleMesh, hit: &Hit, x: Vec3) -> bool {
+    let Some(n) = mesh.normal(hit.prim) else { return true };
+    let [a, b, c] = mesh.triangle(hit.prim);
+    let magnitude = a.abs().max(b.abs()).max(c.abs()).max(x.abs()).max_element();
+    n.dot(x - a).abs() <= TIE_ULPS * f32::EPSILON * magnitude
+}
+
+/// Whether either answer about `hit` is right up to rounding: the hit is at an edge or vertex,
+/// or the ray starts (or, for a segment, ends) within rounding distance of the hit triangle's
+/// plane, where whether it touches that triangle is decided by rounding alone (a shadow ray
+/// running along a wall, a ray leaving a point that lies exactly in a neighbour's plane).
+pub fn ambiguous(mesh: &TriangleMesh, ray: Option<&Ray>, hit: &Hit) -> bool {
+    near_edge(mesh, hit)
+        || ray.is_some_and(|r| {
+            near_plane(mesh, hit, r.origin) || (r.t_max.is_finite() && near_plane(mesh, hit, r.at(r.t_max)))
+        })
+}
+
 /// Classifies the closest hits `a` and `b` of one ray.
 pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict {
+    classify_ray(mesh, None, a, b)
+}
+
+/// [`classify`], also counting as ties the hits that [`ambiguous`] finds ambiguous for `ray`.
+pub fn classify_ray(mesh: &TriangleMesh, ray: Option<&Ray>, a: Option<Hit>, b: Option<Hit>) -> Verdict {
     match (a, b) {
         (None, None) => Verdict::Agree { rel_dt: None },
         (Some(h), None) | (None, Some(h)) => {
-            if near_edge(mesh, &h) {
+            if ambiguous(mesh, ray, &h) {
                 Verdict::EdgeTie
             } else {
                 Verdict::HitMiss
@@ -318,8 +342,8 @@ pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict 
                 Verdict::Agree { rel_dt: Some(if scale > 0.0 { dt / scale } else { 0.0 }) }
             } else if dt <= (TIE_ULPS * f32::EPSILON) as f64 * scale
                 || same_point(mesh, &ha, &hb)
-                || near_edge(mesh, &ha)
-                || near_edge(mesh, &hb)
+                || ambiguous(mesh, ray, &ha)
+                || ambiguous(mesh, ray, &hb)
             {
                 Verdict::EdgeTie
             } else {
@@ -330,7 +354,9 @@ pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict 
 }
 
 /// Casts `rays` through `a` and `b` (closest hit and occlusion) in parallel and counts the
-/// differences. The result does not depend on the thread count.
+/// differences. The result does not depend on the thread count. Each ray is counted once: a
+/// differing occlusion answer is a tie when the occluding backend's closest hit is
+/// [`ambiguous`], and a disagreement otherwise.
 pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &TriangleMesh) -> AgreeReport {
     let empty = || [KindReport::default(); 5];
     let per = rays
@@ -338,13 +364,23 @@ pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &Tri
         .fold(empty, |mut acc, (kind, ray)| {
             let r = &mut acc[*kind as usize];
             r.rays += 1;
-            match classify(mesh, a.intersect(ray), b.intersect(ray)) {
+            let (ha, hb) = (a.intersect(ray), b.intersect(ray));
+            let verdict = classify_ray(mesh, Some(ray), ha, hb);
+            match verdict {
                 Verdict::Agree { rel_dt } => r.max_rel_dt = r.max_rel_dt.max(rel_dt.unwrap_or(0.0)),
                 Verdict::HitMiss => r.hit_miss_disagreements += 1,
                 Verdict::Primitive => r.primitive_disagreements += 1,
                 Verdict::EdgeTie => r.edge_ties += 1,
             }
-            r.occlusion_disagreements += u64::from(a.occluded(ray) != b.occluded(ray));
+            let (oa, ob) = (a.occluded(ray), b.occluded(ray));
+            if oa != ob {
+                let occluder = if oa { ha } else { hb };
+                if occluder.is_some_and(|h| ambiguous(mesh, Some(ray), &h)) {
+                    r.edge_ties += u64::from(verdict != Verdict::EdgeTie);
+                } else {
+                    r.occlusion_disagreements += 1;
+                }
+            }
             acc
         })
         .reduce(empty, |x, y| std::array::from_fn(|k| x[k].merge(y[k])));

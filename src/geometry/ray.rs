@@ -59,7 +59,8 @@ pub fn barycentric_error(v: [Vec3; 3], b: [f32; 3]) -> Vec3 {
 /// still report the surface it leaves; Embree has no conservative `t` bound to reject it.
 #[inline]
 pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
-    let d = n.abs().dot(err).max(gamma(7) * p.abs().max_element());
+    // (1e-30: a point exactly at the world origin still moves, by a normal float.)
+    let d = n.abs().dot(err).max(gamma(7) * p.abs().max_element()).max(1e-30);
     let offset = d * n;
     let mut po = p + offset;
     for i in 0..3 {

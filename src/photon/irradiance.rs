@@ -152,17 +152,27 @@ mod tests {
             for j in 0..100 {
                 let (a, b) = (i as f32 / 100.0, j as f32 / 100.0);
                 let power = Vec3::splat(1e-4);
-                hits.push(PhotonHit { pos: Vec3::new(a, 0.0, b), n: Vec3::Y, wi: Vec3::Y, power });
-                hits.push(PhotonHit { pos: Vec3::new(0.0, a, b), n: Vec3::X, wi: Vec3::X, power });
+                hits.push(PhotonHit {
+                    pos: Vec3::new(a, 0.0, b),
+                    err: Vec3::ZERO,
+                    n: Vec3::Y,
+                    wi: Vec3::Y,
+                    power,
+                });
+                hits.push(PhotonHit {
+                    pos: Vec3::new(0.0, a, b),
+                    err: Vec3::ZERO,
+                    n: Vec3::X,
+                    wi: Vec3::X,
+                    power,
+                });
             }
         }
         let sites = pick_sites(std::slice::from_ref(&hits), 3);
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
         let cache =
-            IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _, _| {
-                Vec3::X
-            });
+            IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| Vec3::X);
         let mut scratch = Vec::new();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
         let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
