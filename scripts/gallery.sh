@@ -30,7 +30,7 @@ for s in cornell caustics pointlight furnace; do
     row "$s" "$s"
     [ -f "$refs/$s.png" ] && cp "$refs/$s.png" "$out/ref-$s.png"
 done
-row cornell-rgb cornell --color rgb
+row cornell-per-channel cornell --color per-channel
 row cornell-final-gather cornell --indirect final-gather --spp 16 --final-gather-rays 32
 row cornell-no-cache cornell --irradiance-cache false --spp 16
 row cornell-box cornell --kernel box

@@ -5,7 +5,7 @@
 
 use super::direct::direct_light;
 use super::{Counters, Shared};
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::config::{Component, IndirectMode};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::{face_forward, Material};
@@ -20,6 +20,9 @@ use rand_pcg::Pcg32;
 #[derive(Default)]
 pub struct Scratch {
     pub neighbors: Vec<Neighbor>,
+    /// A pixel's primary rays and their hits, traced as one coherent batch.
+    pub rays: Vec<Ray>,
+    pub hits: Vec<Option<Hit>>,
 }
 
 /// A surface point reached by a ray.
@@ -47,7 +50,12 @@ impl<A: Accel> Shared<'_, A> {
     /// misses, which they are for every backend).
     #[inline]
     pub fn trace(&self, ray: &Ray) -> Option<SurfaceHit> {
-        let hit = self.accel.intersect(ray)?;
+        self.surface(self.accel.intersect(ray)?)
+    }
+
+    /// The surface point of a backend's hit (`None` on a degenerate triangle).
+    #[inline]
+    pub fn surface(&self, hit: Hit) -> Option<SurfaceHit> {
         let n = self.scene.mesh.normal(hit.prim)?;
         let (p, err) = self.scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
         Some(SurfaceHit { p, err, n, prim: hit.prim, t: hit.t })
@@ -58,8 +66,9 @@ impl<A: Accel> Shared<'_, A> {
         let spp = self.cfg.spp;
         // Stratified jitter over a near-square grid of strata, the remainder uniformly random.
         let side = (spp as f32).sqrt() as u32;
-        let mut sum = Vec3::ZERO;
-        let mut good = 0u32;
+        let mut rays = std::mem::take(&mut scratch.rays);
+        let mut hits = std::mem::take(&mut scratch.hits);
+        rays.clear();
         for s in 0..spp {
             let (jx, jy) = if s < side * side {
                 ((s % side) as f32 + rng.gen::<f32>(), (s / side) as f32 + rng.gen::<f32>())
@@ -68,7 +77,17 @@ impl<A: Accel> Shared<'_, A> {
             };
             let fx = px as f32 + jx / side as f32;
             let fy = py as f32 + jy / side as f32;
-            let l = self.radiance(self.scene_camera.ray(fx, fy), rng, scratch, c);
+            rays.push(self.scene_camera.ray(fx, fy));
+        }
+        // The pixel's primary rays are coherent: one batch (Embree traces them as packets).
+        hits.clear();
+        hits.resize(rays.len(), None);
+        self.accel.intersect_batch(&rays, &mut hits);
+        c.rays.camera += rays.len() as u64;
+        let mut sum = Vec3::ZERO;
+        let mut good = 0u32;
+        for (ray, hit) in rays.iter().zip(&hits) {
+            let l = self.radiance_from(*ray, *hit, rng, scratch, c);
             if l.is_finite() {
                 sum += l;
                 good += 1;
@@ -76,6 +95,8 @@ impl<A: Accel> Shared<'_, A> {
                 c.nonfinite += 1;
             }
         }
+        scratch.rays = rays;
+        scratch.hits = hits;
         if good == 0 {
             Vec3::ZERO
         } else {
@@ -84,16 +105,30 @@ impl<A: Accel> Shared<'_, A> {
     }
 
     /// Radiance arriving along a camera ray.
-    pub fn radiance(&self, mut ray: Ray, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
+    pub fn radiance(&self, ray: Ray, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
+        c.rays.camera += 1;
+        self.radiance_from(ray, self.accel.intersect(&ray), rng, scratch, c)
+    }
+
+    /// Radiance arriving along a camera ray whose first hit `first` is already known.
+    pub fn radiance_from(
+        &self,
+        mut ray: Ray,
+        first: Option<Hit>,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
         let mut beta = Vec3::ONE;
         let mut l = Vec3::ZERO;
         for depth in 0..=self.cfg.max_depth {
-            if depth == 0 {
-                c.rays.camera += 1;
+            let hit = if depth == 0 {
+                first.and_then(|h| self.surface(h))
             } else {
                 c.rays.specular += 1;
-            }
-            let Some(hit) = self.trace(&ray) else { break };
+                self.trace(&ray)
+            };
+            let Some(hit) = hit else { break };
             let m = self.scene.material(hit.prim);
             let wo = -ray.dir.normalize();
             // Emission seen directly or through mirrors and glass (direct light at diffuse
