@@ -144,45 +144,22 @@ impl PhotonMap {
             // Constant BRDF: the estimate is irradiance times kd / pi.
             return self.irradiance(x, ns, params, scratch) * kd * std::f32::consts::FRAC_1_PI;
         }
-        self.tree.knn_with(x, params.k, params.max_radius, flattened_metric(ns, params.flatten), scratch);
-        if scratch.is_empty() {
-            return Vec3::ZERO;
-        }
-        // With k photons found the disc reaches the farthest; with fewer, the whole search disc
-        // was empty beyond them, so its area is the search area.
-        let r2 =
-            if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
-        if !(r2 > 0.0) {
-            return Vec3::ZERO;
-        }
+        let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
         let mut sum = Vec3::ZERO;
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
             let wi = pack::decode_dir_oct(p.dir);
-            if wi.dot(ns) <= 0.0 {
-                continue; // arrived from behind this surface
+            if wi.dot(ns) > 0.0 {
+                sum += kernel_weight(params.kernel, nb.dist2 / r2) * m.eval(n, wo, wi) * self.power(p);
             }
-            let w = kernel_weight(params.kernel, nb.dist2 / r2);
-            sum += w * m.eval(n, wo, wi) * self.power(p);
         }
         sum / (PI * r2)
     }
 
     /// Irradiance at `x` on the side of `ns` (unit): `sum_p w_p power_p / (pi r^2)`, for
-    /// precomputed final-gather radiance (Christensen 1999).
+    /// Lambertian surfaces and precomputed irradiance (Christensen 1999).
     pub fn irradiance(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Vec3 {
-        if self.tree.is_empty() {
-            return Vec3::ZERO;
-        }
-        self.tree.knn_with(x, params.k, params.max_radius, flattened_metric(ns, params.flatten), scratch);
-        if scratch.is_empty() {
-            return Vec3::ZERO;
-        }
-        let r2 =
-            if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
-        if !(r2 > 0.0) {
-            return Vec3::ZERO;
-        }
+        let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
         let mut sum = Vec3::ZERO;
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
@@ -191,6 +168,25 @@ impl PhotonMap {
             }
         }
         sum / (PI * r2)
+    }
+
+    /// Gathers the photons near `x` into `scratch` (a disc flattened along `ns`) and returns the
+    /// squared radius of the estimate's disc, or `None` when nothing was found. Photons arriving
+    /// from behind the surface (`wi . ns <= 0`) are left for the caller to reject.
+    fn gather(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Option<f32> {
+        if self.tree.is_empty() {
+            scratch.clear();
+            return None;
+        }
+        self.tree.knn_with(x, params.k, params.max_radius, flattened_metric(ns, params.flatten), scratch);
+        if scratch.is_empty() {
+            return None;
+        }
+        // With k photons found the disc reaches the farthest; with fewer, the whole search disc
+        // was empty beyond them, so its area is the search area.
+        let r2 =
+            if scratch.len() == params.k { scratch[0].dist2 } else { params.max_radius * params.max_radius };
+        (r2 > 0.0).then_some(r2)
     }
 
     /// Stored photons in tree order, unpacked (for tests and tools).
