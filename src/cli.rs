@@ -2,7 +2,7 @@
 
 use clap::{Args, Parser, Subcommand};
 use photonmap::accel::AccelKind;
-use photonmap::config::{ColorMode, Component, IndirectMode, Kernel, RenderSettings};
+use photonmap::config::{ColorMode, Component, IndirectMode, Integrator, Kernel, RenderSettings};
 use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
@@ -136,6 +136,11 @@ pub struct SettingsArgs {
     /// Render only one term of the sum: emitted, direct, caustic or indirect [default: all].
     #[arg(long, value_enum)]
     pub component: Option<Component>,
+    /// Photon mapping, or the path tracer (next-event estimation and MIS) as a cross-check; the
+    /// path tracer ignores the photon settings and uses --max-depth for every bounce
+    /// [default: photon].
+    #[arg(long, value_enum)]
+    pub integrator: Option<Integrator>,
 }
 
 impl SettingsArgs {
@@ -160,6 +165,7 @@ impl SettingsArgs {
             robust: self.robust,
             irradiance_cache: self.irradiance_cache,
             component: self.component,
+            integrator: self.integrator,
         }
     }
 }

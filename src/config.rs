@@ -58,6 +58,18 @@ impl Component {
     }
 }
 
+/// Which estimator renders the image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Integrator {
+    /// Jensen's two-pass photon mapping (the renderer proper).
+    #[default]
+    Photon,
+    /// An independent unidirectional path tracer with next-event estimation and MIS, sharing
+    /// only the scene, materials, lights and accelerator: a cross-check of the photon mapper.
+    Path,
+}
+
 /// Optional settings as written in `[render]` (or given on the command line). `None` means
 /// "use the default".
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -82,6 +94,7 @@ pub struct RenderSettings {
     pub robust: Option<bool>,
     pub irradiance_cache: Option<bool>,
     pub component: Option<Component>,
+    pub integrator: Option<Integrator>,
 }
 
 impl RenderSettings {
@@ -109,7 +122,8 @@ impl RenderSettings {
             light_samples,
             robust,
             irradiance_cache,
-            component
+            component,
+            integrator
         )
     }
 }
@@ -129,7 +143,8 @@ pub struct RenderConfig {
     pub seed: u64,
     /// Longest photon path (bounces after emission).
     pub max_bounces: u32,
-    /// Longest camera path through mirrors and glass.
+    /// Longest camera path through mirrors and glass; with the path tracer, the longest path
+    /// of any kind (bounces after the camera ray).
     pub max_depth: u32,
     pub gather_photons: u32,
     /// `None`: chosen from the scene size.
@@ -143,8 +158,10 @@ pub struct RenderConfig {
     pub light_samples: u32,
     /// Precompute irradiance at photon positions for diffuse lookups (Christensen 1999).
     pub irradiance_cache: bool,
-    /// Which term of the sum is shown.
+    /// Which term of the sum is shown (photon mapper only).
     pub component: Component,
+    /// Photon mapping or the path tracer.
+    pub integrator: Integrator,
 }
 
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
@@ -189,6 +206,7 @@ impl RenderSettings {
             light_samples: self.light_samples.unwrap_or(1),
             irradiance_cache: self.irradiance_cache.unwrap_or(true),
             component: self.component.unwrap_or_default(),
+            integrator: self.integrator.unwrap_or_default(),
         };
         c.validate()?;
         Ok(c)

@@ -30,6 +30,8 @@ pub struct RayCounts {
     pub photon: u64,
     pub gather: u64,
     pub specular: u64,
+    /// Continuation rays of the path tracer (`--integrator path`).
+    pub path: u64,
 }
 
 impl std::ops::AddAssign for RayCounts {
@@ -39,12 +41,13 @@ impl std::ops::AddAssign for RayCounts {
         self.photon += o.photon;
         self.gather += o.gather;
         self.specular += o.specular;
+        self.path += o.path;
     }
 }
 
 impl RayCounts {
     pub fn total(&self) -> u64 {
-        self.camera + self.shadow + self.photon + self.gather + self.specular
+        self.camera + self.shadow + self.photon + self.gather + self.specular + self.path
     }
 }
 

@@ -6,7 +6,7 @@
 use super::direct::direct_light;
 use super::{Counters, Shared};
 use crate::accel::{Accel, Hit};
-use crate::config::{Component, IndirectMode};
+use crate::config::{Component, IndirectMode, Integrator};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::{face_forward, Material};
 use crate::photon::irradiance::Irradiance;
@@ -61,7 +61,8 @@ impl<A: Accel> Shared<'_, A> {
         Some(SurfaceHit { p, err, n, prim: hit.prim, t: hit.t })
     }
 
-    /// Mean radiance of the samples of pixel `(px, py)`.
+    /// Mean radiance of the samples of pixel `(px, py)`, by the photon mapper or, with
+    /// `--integrator path`, the path tracer ([`super::path`]).
     pub fn pixel(&self, px: u32, py: u32, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
         let spp = self.cfg.spp;
         // Stratified jitter over a near-square grid of strata, the remainder uniformly random.
@@ -86,8 +87,13 @@ impl<A: Accel> Shared<'_, A> {
         c.rays.camera += rays.len() as u64;
         let mut sum = Vec3::ZERO;
         let mut good = 0u32;
+        let path = self.cfg.integrator == Integrator::Path;
         for (ray, hit) in rays.iter().zip(&hits) {
-            let l = self.radiance_from(*ray, *hit, rng, scratch, c);
+            let l = if path {
+                super::path::radiance_path_from(self, *ray, *hit, rng, c)
+            } else {
+                self.radiance_from(*ray, *hit, rng, scratch, c)
+            };
             if l.is_finite() {
                 sum += l;
                 good += 1;

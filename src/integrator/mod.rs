@@ -5,9 +5,10 @@
 pub mod camera;
 pub mod direct;
 pub mod lights;
+pub mod path;
 
 use crate::accel::Accel;
-use crate::config::{ColorMode, RenderConfig};
+use crate::config::{ColorMode, Integrator, RenderConfig};
 use crate::film::Film;
 use crate::photon::irradiance::{self, IrradianceCache};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
@@ -133,8 +134,14 @@ pub fn render<A: Accel>(
         flatten: 8.0,
     };
 
+    // The path tracer needs none of the photon stages.
+    let path = cfg.integrator == Integrator::Path;
+    const PATH_TRACER: &str = "path tracer";
+
     // Indirect map.
-    let why_not_indirect = if !lit {
+    let why_not_indirect = if path {
+        Some(PATH_TRACER)
+    } else if !lit {
         Some("no light has power")
     } else if !analysis.has_diffuse {
         Some("nothing diffuse or glossy: no surface stores photons")
@@ -172,8 +179,10 @@ pub fn render<A: Accel>(
     }
 
     // Caustic map.
-    let targets = if analysis.has_specular { trace::specular_targets(scene) } else { Vec::new() };
-    let why_not_caustic = if !analysis.has_specular {
+    let targets = if analysis.has_specular && !path { trace::specular_targets(scene) } else { Vec::new() };
+    let why_not_caustic = if path {
+        Some(PATH_TRACER.to_string())
+    } else if !analysis.has_specular {
         Some("no specular (mirror or glass) material".to_string())
     } else if !analysis.has_diffuse {
         Some("nothing diffuse or glossy to receive caustics".to_string())
@@ -220,8 +229,13 @@ pub fn render<A: Accel>(
         }
     }
     let cache = if sites.is_empty() {
-        let why =
-            if cfg.irradiance_cache { "no indirect photons" } else { "disabled (--irradiance-cache false)" };
+        let why = if path {
+            PATH_TRACER
+        } else if cfg.irradiance_cache {
+            "no indirect photons"
+        } else {
+            "disabled (--irradiance-cache false)"
+        };
         stats.skip("irradiance", why);
         IrradianceCache::default()
     } else {
@@ -287,7 +301,8 @@ pub fn render<A: Accel>(
         cache: &cache,
     };
     progress.start("camera", cfg.height as u64);
-    let (film, counters) = stats.run("camera", "always", |_| camera_pass(&shared, progress));
+    let why_camera = if path { "always (path tracer)" } else { "always" };
+    let (film, counters) = stats.run("camera", why_camera, |_| camera_pass(&shared, progress));
     progress.finish();
     stats.rays += counters.rays;
     stats.gather_queries = counters.queries;
