@@ -104,6 +104,21 @@ pub struct RenderOutput {
     pub stats: Stats,
 }
 
+/// What every stage of a render reads.
+struct Ctx<'a, A: Accel> {
+    scene: &'a Scene,
+    accel: &'a A,
+    cfg: &'a RenderConfig,
+    progress: &'a dyn Progress,
+    lights: LightSet,
+    analysis: Analysis,
+    gather: GatherParams,
+    caustic_gather: GatherParams,
+}
+
+/// Why a stage is skipped by the path tracer.
+const PATH_TRACER: &str = "path tracer";
+
 /// Renders `scene` with `accel` as `cfg` says. `stats` arrives with the stages already run
 /// (loading, acceleration build) and is completed here.
 pub fn render<A: Accel>(
@@ -116,192 +131,35 @@ pub fn render<A: Accel>(
     let start = std::time::Instant::now();
     let lights = stats.run("lights", "prepare emitters and light sampling", |_| LightSet::new(scene));
     let analysis = Analysis::of(scene, &lights);
-    let (_, radius) = scene.bounds().bounding_sphere();
-    let lit = analysis.light_power.max_element() > 0.0;
-    let mut maps = PhotonMaps::default();
-    let mut sites = Vec::new();
-    let auto_radius = 0.1 * radius;
-    let gather = GatherParams {
-        k: cfg.gather_photons as usize,
-        max_radius: cfg.gather_radius.unwrap_or(auto_radius),
+    let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
+    let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
+        k: k as usize,
+        max_radius: radius.unwrap_or(default),
         kernel: cfg.kernel,
         flatten: 8.0,
     };
-    let caustic_gather = GatherParams {
-        k: cfg.caustic_gather_photons as usize,
-        max_radius: cfg.caustic_gather_radius.unwrap_or(0.25 * auto_radius),
-        kernel: cfg.kernel,
-        flatten: 8.0,
+    let ctx = Ctx {
+        scene,
+        accel,
+        cfg,
+        progress,
+        lights,
+        analysis,
+        gather: params(cfg.gather_photons, cfg.gather_radius, auto_radius),
+        caustic_gather: params(cfg.caustic_gather_photons, cfg.caustic_gather_radius, 0.25 * auto_radius),
     };
-
-    // The path tracer needs none of the photon stages.
-    let path = cfg.integrator == Integrator::Path;
-    const PATH_TRACER: &str = "path tracer";
-
-    // Indirect map.
-    let why_not_indirect = if path {
-        Some(PATH_TRACER)
-    } else if !lit {
-        Some("no light has power")
-    } else if !analysis.has_diffuse {
-        Some("nothing diffuse or glossy: no surface stores photons")
-    } else if cfg.photons == 0 {
-        Some("photon budget is 0")
-    } else {
-        None
-    };
-    match why_not_indirect {
-        Some(why) => stats.skip("photons.indirect", why),
-        None => {
-            progress.start("indirect photons", cfg.photons);
-            let out = stats.run("photons.indirect", "diffuse surfaces and lit scene", |_| {
-                let spec = trace::PassSpec {
-                    pass: Pass::Indirect,
-                    n: cfg.photons,
-                    color: cfg.color,
-                    max_bounces: cfg.max_bounces,
-                    targets: &[],
-                    seed: cfg.seed,
-                };
-                trace::trace_pass(scene, accel, &lights, &spec, progress)
-            });
-            progress.finish();
-            stats.rays.photon += out.rays;
-            if cfg.irradiance_cache {
-                // The same density of sites whatever the colour mode: per-channel maps split
-                // the photons three ways, so each contributes a third as many sites.
-                sites = irradiance::pick_sites(&out.maps, IRRADIANCE_STRIDE * out.maps.len());
-            }
-            maps.indirect =
-                stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
-            record_maps(&mut stats, "indirect", &maps.indirect);
-        }
-    }
-
-    // Caustic map.
-    let targets = if analysis.has_specular && !path { trace::specular_targets(scene) } else { Vec::new() };
-    let why_not_caustic = if path {
-        Some(PATH_TRACER.to_string())
-    } else if !analysis.has_specular {
-        Some("no specular (mirror or glass) material".to_string())
-    } else if !analysis.has_diffuse {
-        Some("nothing diffuse or glossy to receive caustics".to_string())
-    } else if !lit {
-        Some("no light has power".to_string())
-    } else if cfg.caustic_photons == 0 {
-        Some("caustic photon budget is 0".to_string())
-    } else {
-        None
-    };
-    match why_not_caustic {
-        Some(why) => stats.skip("photons.caustic", why),
-        None => {
-            let acceptance = trace::target_acceptance(&lights, &targets, 1 << 16, cfg.seed);
-            if acceptance <= 0.0 {
-                stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
-            } else {
-                // Tries such that about `caustic_photons` photons are aimed at the targets.
-                let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64)
-                    .min(cfg.caustic_photons.saturating_mul(1000));
-                let reason = format!(
-                    "{} specular targets, {:.2}% of emission aimed at them",
-                    targets.len(),
-                    100.0 * acceptance
-                );
-                progress.start("caustic photons", tries);
-                let out = stats.run("photons.caustic", reason, |_| {
-                    let spec = trace::PassSpec {
-                        pass: Pass::Caustic,
-                        n: tries,
-                        color: cfg.color,
-                        max_bounces: cfg.max_bounces,
-                        targets: &targets,
-                        seed: cfg.seed ^ 0x5EED,
-                    };
-                    trace::trace_pass(scene, accel, &lights, &spec, progress)
-                });
-                progress.finish();
-                stats.rays.photon += out.rays;
-                maps.caustic =
-                    stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
-                record_maps(&mut stats, "caustic", &maps.caustic);
-            }
-        }
-    }
-    let cache = if sites.is_empty() {
-        let why = if path {
-            PATH_TRACER
-        } else if cfg.irradiance_cache {
-            "no indirect photons"
-        } else {
-            "disabled (--irradiance-cache false)"
-        };
-        stats.skip("irradiance", why);
-        IrradianceCache::default()
-    } else {
-        let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
-        let cache = stats.run("irradiance", reason, |_| {
-            // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
-            // light and cosine sampling), times pi.
-            let empty = IrradianceCache::default();
-            let shared = Shared {
-                scene,
-                scene_camera: scene.camera,
-                accel,
-                lights: &lights,
-                maps: &maps,
-                cfg,
-                gather,
-                caustic_gather,
-                cache: &empty,
-            };
-            let white = crate::material::Material::Diffuse { kd: Vec3::ONE };
-            let direct = |i: usize, site: &irradiance::SitePoint| {
-                if cfg.indirect != crate::config::IndirectMode::FinalGather {
-                    return Vec3::ZERO; // only final gathering reads it
-                }
-                let mut rng = Pcg32::seed_from_u64(trace::mix(cfg.seed, 0xD12EC7, i as u64));
-                let mut c = Counters::default();
-                let hit = camera::SurfaceHit { p: site.pos, err: site.err, n: site.n, prim: 0, t: 0.0 };
-                std::f32::consts::PI
-                    * direct::direct_light(
-                        &shared,
-                        &hit,
-                        site.n,
-                        &white,
-                        SITE_LIGHT_SAMPLES,
-                        &mut rng,
-                        &mut c,
-                    )
-            };
-            IrradianceCache::build(sites, &maps.indirect, &maps.caustic, &gather, &caustic_gather, direct)
-        });
-        stats.photons.insert(
-            "irradiance_cache".into(),
-            MapStats { emitted: 0, stored: cache.len() as u64, bytes: cache.bytes() as u64 },
-        );
-        cache
-    };
+    let (indirect, sites) = ctx.indirect_pass(&mut stats);
+    let maps = PhotonMaps { indirect, caustic: ctx.caustic_pass(&mut stats) };
+    let cache = ctx.irradiance_cache(&mut stats, &maps, sites);
     let photon_seconds = stats.seconds("photons.indirect") + stats.seconds("photons.caustic");
     if photon_seconds > 0.0 {
         let paths: u64 = stats.photons.values().map(|m| m.emitted).sum();
         stats.photons_traced_per_second = paths as f64 / photon_seconds;
     }
 
-    // Camera pass.
-    let shared = Shared {
-        scene,
-        scene_camera: scene.camera.with_resolution(cfg.width, cfg.height),
-        accel,
-        lights: &lights,
-        maps: &maps,
-        cfg,
-        gather,
-        caustic_gather,
-        cache: &cache,
-    };
+    let shared = ctx.shared(&maps, &cache, scene.camera.with_resolution(cfg.width, cfg.height));
     progress.start("camera", cfg.height as u64);
-    let why_camera = if path { "always (path tracer)" } else { "always" };
+    let why_camera = if cfg.integrator == Integrator::Path { "always (path tracer)" } else { "always" };
     let (film, counters) = stats.run("camera", why_camera, |_| camera_pass(&shared, progress));
     progress.finish();
     stats.rays += counters.rays;
@@ -315,6 +173,183 @@ pub fn render<A: Accel>(
         stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
     }
     RenderOutput { film, stats }
+}
+
+impl<'a, A: Accel> Ctx<'a, A> {
+    fn shared<'b>(
+        &'b self,
+        maps: &'b PhotonMaps,
+        cache: &'b IrradianceCache,
+        camera: Camera,
+    ) -> Shared<'b, A> {
+        Shared {
+            scene: self.scene,
+            scene_camera: camera,
+            accel: self.accel,
+            lights: &self.lights,
+            maps,
+            cfg: self.cfg,
+            gather: self.gather,
+            caustic_gather: self.caustic_gather,
+            cache,
+        }
+    }
+
+    fn lit(&self) -> bool {
+        self.analysis.light_power.max_element() > 0.0
+    }
+
+    /// The indirect map, and the photon positions chosen for precomputed irradiance.
+    fn indirect_pass(&self, stats: &mut Stats) -> (Vec<PhotonMap>, Vec<irradiance::SitePoint>) {
+        let cfg = self.cfg;
+        let why_not = if cfg.integrator == Integrator::Path {
+            Some(PATH_TRACER)
+        } else if !self.lit() {
+            Some("no light has power")
+        } else if !self.analysis.has_diffuse {
+            Some("nothing diffuse or glossy: no surface stores photons")
+        } else if cfg.photons == 0 {
+            Some("photon budget is 0")
+        } else {
+            None
+        };
+        if let Some(why) = why_not {
+            stats.skip("photons.indirect", why);
+            return (Vec::new(), Vec::new());
+        }
+        self.progress.start("indirect photons", cfg.photons);
+        let out = stats.run("photons.indirect", "diffuse surfaces and lit scene", |_| {
+            let spec = trace::PassSpec {
+                pass: Pass::Indirect,
+                n: cfg.photons,
+                color: cfg.color,
+                max_bounces: cfg.max_bounces,
+                targets: &[],
+                seed: cfg.seed,
+            };
+            trace::trace_pass(self.scene, self.accel, &self.lights, &spec, self.progress)
+        });
+        self.progress.finish();
+        stats.rays.photon += out.rays;
+        // The same density of sites whatever the colour mode: per-channel maps split the photons
+        // three ways, so each contributes a third as many sites.
+        let sites = if cfg.irradiance_cache {
+            irradiance::pick_sites(&out.maps, IRRADIANCE_STRIDE * out.maps.len())
+        } else {
+            Vec::new()
+        };
+        let maps = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
+        record_maps(stats, "indirect", &maps);
+        (maps, sites)
+    }
+
+    /// The caustic map, from photons aimed at the specular objects.
+    fn caustic_pass(&self, stats: &mut Stats) -> Vec<PhotonMap> {
+        let cfg = self.cfg;
+        let why_not = if cfg.integrator == Integrator::Path {
+            Some(PATH_TRACER)
+        } else if !self.analysis.has_specular {
+            Some("no specular (mirror or glass) material")
+        } else if !self.analysis.has_diffuse {
+            Some("nothing diffuse or glossy to receive caustics")
+        } else if !self.lit() {
+            Some("no light has power")
+        } else if cfg.caustic_photons == 0 {
+            Some("caustic photon budget is 0")
+        } else {
+            None
+        };
+        if let Some(why) = why_not {
+            stats.skip("photons.caustic", why);
+            return Vec::new();
+        }
+        let targets = trace::specular_targets(self.scene);
+        let acceptance = trace::target_acceptance(&self.lights, &targets, 1 << 16, cfg.seed);
+        if acceptance <= 0.0 {
+            stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
+            return Vec::new();
+        }
+        // Tries such that about `caustic_photons` photons are aimed at the targets.
+        let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64)
+            .min(cfg.caustic_photons.saturating_mul(1000));
+        let reason = format!(
+            "{} specular targets, {:.2}% of emission aimed at them",
+            targets.len(),
+            100.0 * acceptance
+        );
+        self.progress.start("caustic photons", tries);
+        let out = stats.run("photons.caustic", reason, |_| {
+            let spec = trace::PassSpec {
+                pass: Pass::Caustic,
+                n: tries,
+                color: cfg.color,
+                max_bounces: cfg.max_bounces,
+                targets: &targets,
+                seed: cfg.seed ^ 0x5EED,
+            };
+            trace::trace_pass(self.scene, self.accel, &self.lights, &spec, self.progress)
+        });
+        self.progress.finish();
+        stats.rays.photon += out.rays;
+        let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
+        record_maps(stats, "caustic", &maps);
+        maps
+    }
+
+    /// Precomputed irradiance at `sites` (empty when there are none).
+    fn irradiance_cache(
+        &self,
+        stats: &mut Stats,
+        maps: &PhotonMaps,
+        sites: Vec<irradiance::SitePoint>,
+    ) -> IrradianceCache {
+        let cfg = self.cfg;
+        if sites.is_empty() {
+            let why = if cfg.integrator == Integrator::Path {
+                PATH_TRACER
+            } else if cfg.irradiance_cache {
+                "no indirect photons"
+            } else {
+                "disabled (--irradiance-cache false)"
+            };
+            stats.skip("irradiance", why);
+            return IrradianceCache::default();
+        }
+        let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
+        let cache = stats.run("irradiance", reason, |_| {
+            let (gather, caustic_gather) = (&self.gather, &self.caustic_gather);
+            if cfg.indirect != crate::config::IndirectMode::FinalGather {
+                // Only final gathering reads the direct part.
+                return IrradianceCache::build(
+                    sites,
+                    &maps.indirect,
+                    &maps.caustic,
+                    gather,
+                    caustic_gather,
+                    |_, _| Vec3::ZERO,
+                );
+            }
+            // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
+            // light and cosine sampling), times pi.
+            let empty = IrradianceCache::default();
+            let shared = self.shared(maps, &empty, self.scene.camera);
+            let white = crate::material::Material::Diffuse { kd: Vec3::ONE };
+            let direct = |i: usize, site: &irradiance::SitePoint| {
+                let mut rng = Pcg32::seed_from_u64(trace::mix(cfg.seed, 0xD12EC7, i as u64));
+                let mut c = Counters::default();
+                let hit = camera::SurfaceHit { p: site.pos, err: site.err, n: site.n, prim: 0, t: 0.0 };
+                let l =
+                    direct::direct_light(&shared, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
+                std::f32::consts::PI * l
+            };
+            IrradianceCache::build(sites, &maps.indirect, &maps.caustic, gather, caustic_gather, direct)
+        });
+        let bytes = cache.bytes() as u64;
+        stats
+            .photons
+            .insert("irradiance_cache".into(), MapStats { emitted: 0, stored: cache.len() as u64, bytes });
+        cache
+    }
 }
 
 /// Builds the accelerator `cfg` asks for and renders: the whole pipeline behind `photonmap
