@@ -47,33 +47,11 @@ const PAR_CHUNK: usize = 1024;
 
 /// A UV sphere of about `2 n²` triangles with a smooth radial bump field.
 fn noisy_sphere(n: u32) -> TriangleMesh {
-    let (rings, segments) = (n, n);
     let bump = |p: Vec3| 1.0 + 0.05 * (7.0 * p.x).sin() * (9.0 * p.y).sin() * (11.0 * p.z).sin();
-    let mut positions = vec![Vec3::Z * bump(Vec3::Z)];
-    for i in 1..rings {
-        let theta = std::f32::consts::PI * i as f32 / rings as f32;
-        for j in 0..segments {
-            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
-            let p = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
-            positions.push(p * bump(p));
-        }
-    }
-    let south = positions.len() as u32;
-    positions.push(-Vec3::Z * bump(-Vec3::Z));
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let mut indices = Vec::new();
-    for j in 0..segments {
-        indices.push([0, ring(1, j), ring(1, j + 1)]);
-        indices.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
-            indices.push([a, c, d]);
-            indices.push([a, d, b]);
-        }
-    }
-    TriangleMesh { positions, indices }
+    TriangleMesh::parametric_sphere(n, n, |theta, phi| {
+        let p = Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos());
+        p * bump(p)
+    })
 }
 
 /// A closed box (the room), each face split into `2 n²` triangles.

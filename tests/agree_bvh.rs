@@ -11,31 +11,9 @@ use rayon::prelude::*;
 
 /// A closed UV sphere: `rings` latitude bands, `segments` longitudes, single-vertex poles.
 fn uv_sphere(centre: Vec3, r: f32, rings: u32, segments: u32) -> TriangleMesh {
-    let mut positions = vec![centre + Vec3::Z * r];
-    for i in 1..rings {
-        let theta = std::f32::consts::PI * i as f32 / rings as f32;
-        for j in 0..segments {
-            let phi = std::f32::consts::TAU * j as f32 / segments as f32;
-            positions
-                .push(centre + r * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()));
-        }
-    }
-    let south = positions.len() as u32;
-    positions.push(centre - Vec3::Z * r);
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let mut indices = Vec::new();
-    for j in 0..segments {
-        indices.push([0, ring(1, j), ring(1, j + 1)]);
-        indices.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
-            indices.push([a, c, d]);
-            indices.push([a, d, b]);
-        }
-    }
-    TriangleMesh { positions, indices }
+    TriangleMesh::parametric_sphere(rings, segments, |theta, phi| {
+        centre + r * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
+    })
 }
 
 /// A closed box of 12 triangles over 8 shared corners.

@@ -316,32 +316,9 @@ fn noisy_sphere(centre: Vec3, r: f32, rings: u32, segments: u32) -> TriangleMesh
             + 0.03 * (17.0 * theta + 1.0).sin() * (11.0 * phi).sin()
             + 0.01 * (61.0 * theta).cos() * (47.0 * phi + 2.0).sin())
     };
-    let point = |theta: f32, phi: f32| {
+    TriangleMesh::parametric_sphere(rings, segments, |theta, phi| {
         centre + radius(theta, phi) * Vec3::new(theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos())
-    };
-    let mut positions = vec![point(0.0, 0.0)];
-    for i in 1..rings {
-        let theta = std::f32::consts::PI * i as f32 / rings as f32;
-        for j in 0..segments {
-            positions.push(point(theta, std::f32::consts::TAU * j as f32 / segments as f32));
-        }
-    }
-    let south = positions.len() as u32;
-    positions.push(point(std::f32::consts::PI, 0.0));
-    let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
-    let mut indices = Vec::with_capacity(2 * (rings * segments) as usize);
-    for j in 0..segments {
-        indices.push([0, ring(1, j), ring(1, j + 1)]);
-        indices.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
-    }
-    for i in 1..rings - 1 {
-        for j in 0..segments {
-            let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
-            indices.push([a, c, d]);
-            indices.push([a, d, b]);
-        }
-    }
-    TriangleMesh { positions, indices }
+    })
 }
 
 #[test]

@@ -92,6 +92,36 @@ impl TriangleMesh {
         self.indices.iter().flatten().fold(Aabb::EMPTY, |b, &v| b.grow(self.positions[v as usize]))
     }
 
+    /// A closed sphere-like surface for tests and benchmarks: `rings` latitude bands and
+    /// `segments` longitudes, single-vertex poles on ±Z, outward winding, vertex positions from
+    /// `point(theta, phi)` (polar angle from +Z, azimuth); `2 segments (rings - 1)` triangles.
+    pub fn parametric_sphere(rings: u32, segments: u32, point: impl Fn(f32, f32) -> Vec3) -> Self {
+        assert!(rings >= 2 && segments >= 3, "a sphere needs at least 2 rings and 3 segments");
+        let mut positions = vec![point(0.0, 0.0)];
+        for i in 1..rings {
+            let theta = std::f32::consts::PI * i as f32 / rings as f32;
+            for j in 0..segments {
+                positions.push(point(theta, std::f32::consts::TAU * j as f32 / segments as f32));
+            }
+        }
+        let south = positions.len() as u32;
+        positions.push(point(std::f32::consts::PI, 0.0));
+        let ring = |i: u32, j: u32| 1 + (i - 1) * segments + j % segments;
+        let mut indices = Vec::with_capacity(2 * (rings * segments) as usize);
+        for j in 0..segments {
+            indices.push([0, ring(1, j), ring(1, j + 1)]);
+            indices.push([south, ring(rings - 1, j + 1), ring(rings - 1, j)]);
+        }
+        for i in 1..rings - 1 {
+            for j in 0..segments {
+                let (a, b, c, d) = (ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1));
+                indices.push([a, c, d]);
+                indices.push([a, d, b]);
+            }
+        }
+        TriangleMesh { positions, indices }
+    }
+
     /// Appends another mesh, offsetting its indices.
     pub fn append(&mut self, other: &TriangleMesh) {
         let base = self.positions.len() as u32;
