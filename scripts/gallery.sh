@@ -36,6 +36,13 @@ row cornell-no-cache cornell --irradiance-cache false --spp 16
 row cornell-box cornell --kernel box
 row cornell-gaussian cornell --kernel gaussian
 row cornell-20k-photons cornell --photons 20000
+row cornell-spp4 cornell --spp 4
+row cornell-light-samples cornell --spp 16 --light-samples 4
+row cornell-k20 cornell --gather-photons 20
+row cornell-path cornell --integrator path
+row caustics-k10 caustics --caustic-gather-photons 10
+row caustics-depth1 caustics --max-depth 1
+row caustics-bvh caustics --accel bvh
 row caustics-direct caustics --component direct
 row caustics-caustic caustics --component caustic
 row caustics-indirect caustics --component indirect

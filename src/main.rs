@@ -71,6 +71,7 @@ fn render(args: cli::RenderArgs) -> Result<()> {
         output.film.write_png(png)?;
     }
     stats.wall_seconds = wall.elapsed().as_secs_f64();
+    stats.peak_memory_bytes = photonmap::stats::peak_memory_bytes().unwrap_or(0);
     if let Some(path) = &args.stats {
         let json = serde_json::to_string_pretty(&stats)?;
         std::fs::write(path, json)

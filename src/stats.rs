@@ -65,8 +65,19 @@ pub struct Stats {
     pub rays_per_second: f64,
     pub photons_traced_per_second: f64,
     pub gather_queries: u64,
+    pub gather_queries_per_second: f64,
     pub nonfinite_samples: u64,
     pub wall_seconds: f64,
+    /// Peak resident memory of the process (Linux `VmHWM`), 0 where unknown.
+    pub peak_memory_bytes: u64,
+}
+
+/// The process's peak resident set size from `/proc/self/status` (Linux), if available.
+pub fn peak_memory_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 impl Stats {

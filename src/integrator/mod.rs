@@ -164,6 +164,10 @@ pub fn render<A: Accel>(
     progress.finish();
     stats.rays += counters.rays;
     stats.gather_queries = counters.queries;
+    let camera_seconds = stats.seconds("camera");
+    if camera_seconds > 0.0 {
+        stats.gather_queries_per_second = counters.queries as f64 / camera_seconds;
+    }
     stats.nonfinite_samples = counters.nonfinite;
     stats.width = cfg.width;
     stats.height = cfg.height;
