@@ -226,8 +226,10 @@ impl<A: Accel> Shared<'_, A> {
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
     /// diffuse or glossy surface (after any mirrors and glass), the radiance leaving it toward
-    /// the gather point is read from the maps, plus its direct light by one shadow ray. Emission
-    /// is not counted there: it is direct light at the gather point, already sampled.
+    /// the gather point: on Lambertian surfaces from the precomputed direct, indirect and caustic
+    /// irradiance (one lookup, no shadow ray), elsewhere from one shadow ray plus the maps'
+    /// estimates. Emission is not counted there: it is direct light at the gather point,
+    /// already sampled.
     fn final_gather(
         &self,
         hit: &SurfaceHit,
