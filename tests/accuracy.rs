@@ -14,19 +14,10 @@
 
 use photonmap::config::{ColorMode, IndirectMode, RenderSettings};
 use photonmap::film::{compare, Film};
-use photonmap::integrator::{render_scene, Quiet};
 use photonmap::scene::Scene;
-use std::path::Path;
+mod common;
 
-fn scene(name: &str) -> Scene {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Scene::load(root.join("scenes").join(name).join(format!("{name}.toml"))).unwrap()
-}
-
-fn reference(name: &str) -> Film {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Film::read_exr(&root.join("tests/data/refs").join(format!("{name}-64.exr"))).unwrap()
-}
+use common::{reference, render_checked, scene};
 
 fn settings() -> RenderSettings {
     RenderSettings {
@@ -39,11 +30,7 @@ fn settings() -> RenderSettings {
 }
 
 fn render(s: &Scene, settings: &RenderSettings) -> Film {
-    let cfg = s.render.overridden_by(settings).resolve(64, 64).unwrap();
-    let out = render_scene(s, &cfg, &Quiet).unwrap();
-    assert_eq!(out.stats.nonfinite_samples, 0, "non-finite samples");
-    assert_eq!(out.film.nonfinite_count(), 0, "non-finite pixels");
-    out.film
+    render_checked(s, settings, 64).film
 }
 
 fn check(name: &str, settings: &RenderSettings, bound: f64) {

@@ -3,31 +3,19 @@
 //! 4), agreement with the photon mapper, and determinism across thread counts.
 
 use photonmap::config::{Integrator, RenderSettings};
-use photonmap::film::{compare, Film};
-use photonmap::integrator::{render_scene, Quiet, RenderOutput};
+use photonmap::film::compare;
+use photonmap::integrator::RenderOutput;
 use photonmap::scene::Scene;
-use std::path::Path;
+mod common;
 
-fn scene(name: &str) -> Scene {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Scene::load(root.join("scenes").join(name).join(format!("{name}.toml"))).unwrap()
-}
-
-fn reference(name: &str) -> Film {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    Film::read_exr(&root.join("tests/data/refs").join(format!("{name}-64.exr"))).unwrap()
-}
+use common::{reference, render_checked, scene};
 
 fn path_settings() -> RenderSettings {
     RenderSettings { integrator: Some(Integrator::Path), spp: Some(64), seed: Some(3), ..Default::default() }
 }
 
 fn render(s: &Scene, settings: &RenderSettings, size: u32) -> RenderOutput {
-    let cfg = s.render.overridden_by(settings).resolve(size, size).unwrap();
-    let out = render_scene(s, &cfg, &Quiet).unwrap();
-    assert_eq!(out.stats.nonfinite_samples, 0, "non-finite samples");
-    assert_eq!(out.film.nonfinite_count(), 0, "non-finite pixels");
-    out
+    render_checked(s, settings, size)
 }
 
 /// White furnace (albedo 0.5, Le 1 everywhere): with max depth d the exact radiance is

@@ -136,9 +136,6 @@ impl PhotonMap {
         params: &GatherParams,
         scratch: &mut Vec<Neighbor>,
     ) -> Vec3 {
-        if self.tree.is_empty() {
-            return Vec3::ZERO;
-        }
         let ns = face_forward(n, wo);
         if let Some(kd) = m.lambertian() {
             // Constant BRDF: the estimate is irradiance times kd / pi.
