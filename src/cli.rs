@@ -16,7 +16,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Cast the same rays through Embree, the BVH (and brute force on small scenes) and report
     /// how often they disagree.
     Agree(AgreeArgs),
@@ -71,6 +71,9 @@ pub struct RenderArgs {
     /// Image height (default: the scene's camera).
     #[arg(long)]
     pub height: Option<u32>,
+    /// Write the image so far (EXR, and PNG if asked) every this many passes.
+    #[arg(long, value_name = "K")]
+    pub checkpoint_every: Option<u32>,
     #[command(flatten)]
     pub settings: SettingsArgs,
 }
@@ -141,6 +144,18 @@ pub struct SettingsArgs {
     /// [default: photon].
     #[arg(long, value_enum)]
     pub integrator: Option<Integrator>,
+    /// Render this many passes and average them (progressive photon mapping shrinks its radii
+    /// between passes) [default: 1; sppm: 64 unless --time is given].
+    #[arg(long)]
+    pub passes: Option<u32>,
+    /// Time budget in seconds from the start of the command: passes stop before the budget
+    /// would be exceeded and the image so far is written.
+    #[arg(long, value_name = "SECONDS")]
+    pub time: Option<f64>,
+    /// Progressive photon mapping's alpha, the fraction of new photons kept when the radius
+    /// shrinks, in (0, 1) [default: 0.7].
+    #[arg(long)]
+    pub alpha: Option<f32>,
 }
 
 impl SettingsArgs {
@@ -166,6 +181,9 @@ impl SettingsArgs {
             irradiance_cache: self.irradiance_cache,
             component: self.component,
             integrator: self.integrator,
+            passes: self.passes,
+            time: self.time,
+            alpha: self.alpha,
         }
     }
 }

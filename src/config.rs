@@ -68,6 +68,9 @@ pub enum Integrator {
     /// An independent unidirectional path tracer with next-event estimation and MIS, sharing
     /// only the scene, materials, lights and accelerator: a cross-check of the photon mapper.
     Path,
+    /// Stochastic progressive photon mapping (Hachisuka & Jensen 2009): passes of photons with
+    /// a per-pixel radius that shrinks, so the error goes to zero as passes are added.
+    Sppm,
 }
 
 /// Optional settings as written in `[render]` (or given on the command line). `None` means
@@ -95,6 +98,9 @@ pub struct RenderSettings {
     pub irradiance_cache: Option<bool>,
     pub component: Option<Component>,
     pub integrator: Option<Integrator>,
+    pub passes: Option<u32>,
+    pub time: Option<f64>,
+    pub alpha: Option<f32>,
 }
 
 impl RenderSettings {
@@ -123,7 +129,10 @@ impl RenderSettings {
             robust,
             irradiance_cache,
             component,
-            integrator
+            integrator,
+            passes,
+            time,
+            alpha
         )
     }
 }
@@ -160,9 +169,24 @@ pub struct RenderConfig {
     pub irradiance_cache: bool,
     /// Which term of the sum is shown (photon mapper only).
     pub component: Component,
-    /// Photon mapping or the path tracer.
+    /// Photon mapping, the path tracer or progressive photon mapping.
     pub integrator: Integrator,
+    /// Passes to render and average (progressive photon mapping refines its radii between
+    /// them); `None`: one pass, or as many as `time` allows.
+    pub passes: Option<u32>,
+    /// Time budget in seconds: no pass starts that would end after it (the first always runs).
+    pub time: Option<f64>,
+    /// Progressive photon mapping: the fraction of new photons kept at each radius update
+    /// (Hachisuka & Jensen's alpha, in (0, 1)).
+    pub alpha: f32,
 }
+
+/// Progressive photon mapping's defaults: photons per pass (indirect and caustic), camera
+/// samples per pixel per pass, and passes when no time budget is given.
+pub const SPPM_PHOTONS: u64 = 100_000;
+pub const SPPM_CAUSTIC_PHOTONS: u64 = 30_000;
+pub const SPPM_SPP: u32 = 4;
+pub const SPPM_PASSES: u32 = 64;
 
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
 pub const BYTES_PER_PHOTON: u64 = 20;
@@ -184,14 +208,21 @@ fn bad(field: &'static str, message: impl Into<String>) -> ConfigError {
 impl RenderSettings {
     /// Fills defaults and validates. `width`/`height` come from the camera unless overridden.
     pub fn resolve(&self, width: u32, height: u32) -> Result<RenderConfig, ConfigError> {
+        let integrator = self.integrator.unwrap_or_default();
+        // Progressive photon mapping counts photons and camera samples per pass.
+        let sppm = integrator == Integrator::Sppm;
         let c = RenderConfig {
             accel: self.accel.unwrap_or_else(AccelKind::default_kind),
             robust: self.robust.unwrap_or(true),
             width,
             height,
-            photons: self.photons.unwrap_or(1_000_000),
-            caustic_photons: self.caustic_photons.unwrap_or(300_000),
-            spp: self.spp.unwrap_or(64),
+            photons: self.photons.unwrap_or(if sppm { SPPM_PHOTONS } else { 1_000_000 }),
+            caustic_photons: self.caustic_photons.unwrap_or(if sppm {
+                SPPM_CAUSTIC_PHOTONS
+            } else {
+                300_000
+            }),
+            spp: self.spp.unwrap_or(if sppm { SPPM_SPP } else { 64 }),
             seed: self.seed.unwrap_or(1),
             max_bounces: self.max_bounces.unwrap_or(64),
             max_depth: self.max_depth.unwrap_or(16),
@@ -206,7 +237,10 @@ impl RenderSettings {
             light_samples: self.light_samples.unwrap_or(1),
             irradiance_cache: self.irradiance_cache.unwrap_or(true),
             component: self.component.unwrap_or_default(),
-            integrator: self.integrator.unwrap_or_default(),
+            integrator,
+            passes: self.passes.or(if sppm && self.time.is_none() { Some(SPPM_PASSES) } else { None }),
+            time: self.time,
+            alpha: self.alpha.unwrap_or(0.7),
         };
         c.validate()?;
         Ok(c)
@@ -263,6 +297,22 @@ impl RenderConfig {
         }
         if self.light_samples == 0 || self.light_samples > 1024 {
             return Err(bad("light_samples", format!("{} is not in 1..=1024", self.light_samples)));
+        }
+        if let Some(p) = self.passes {
+            if p == 0 || p > 1 << 24 {
+                return Err(bad("passes", format!("{p} is not in 1..=16777216")));
+            }
+        }
+        if let Some(t) = self.time {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(bad("time", format!("{t} must be a finite number of seconds above 0")));
+            }
+        }
+        if !(self.alpha > 0.0 && self.alpha < 1.0) {
+            return Err(bad("alpha", format!("{} is not in (0, 1)", self.alpha)));
+        }
+        if self.integrator == Integrator::Sppm && self.component != Component::All {
+            return Err(bad("component", "progressive photon mapping renders the whole sum only"));
         }
         if self.max_bounces > 10_000 || self.max_depth > 10_000 {
             return Err(bad("max_bounces/max_depth", "at most 10000"));

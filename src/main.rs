@@ -11,12 +11,18 @@ use photonmap::integrator;
 use photonmap::scene::Scene;
 use photonmap::stats::Stats;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => match render(*args) {
+            // Stopped by Ctrl-C after writing the image so far: the shell's code for SIGINT.
+            Ok(Finished::Interrupted) => return ExitCode::from(130),
+            Ok(Finished::Done) => Ok(()),
+            Err(e) => Err(e),
+        },
         Command::Agree(args) => agree(args),
         Command::Info { scene } => info(&scene),
         Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
@@ -43,7 +49,31 @@ fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     b.build().context("could not start the worker threads")
 }
 
-fn render(args: cli::RenderArgs) -> Result<()> {
+/// How a render ended.
+enum Finished {
+    Done,
+    /// Ctrl-C stopped a progressive render; the passes done were written.
+    Interrupted,
+}
+
+/// Set by the first Ctrl-C of a progressive render.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Ctrl-C stops a progressive render after the pass under way, and the image so far is
+/// written; a second Ctrl-C, or one during a single-pass render, quits at once (any existing
+/// output file is left as it was: images are written whole or not at all).
+fn install_interrupt_handler(progressive: bool) -> Result<()> {
+    ctrlc::set_handler(move || {
+        if progressive && !STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("\nphotonmap: interrupted; finishing this pass to write the image so far (Ctrl-C again to quit without writing)");
+        } else {
+            std::process::exit(130);
+        }
+    })
+    .context("could not install the Ctrl-C handler")
+}
+
+fn render(args: cli::RenderArgs) -> Result<Finished> {
     let wall = Instant::now();
     let mut stats = Stats::default();
     let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| Scene::load(&args.scene))?;
@@ -62,7 +92,26 @@ fn render(args: cli::RenderArgs) -> Result<()> {
     let pool = pool(args.threads)?;
     let progress = progress::Bars::new(args.quiet);
     let load = stats.stages.clone();
-    let mut output = pool.install(|| integrator::render_scene(&scene, &cfg, &progress))?;
+    let progressive = cfg.time.is_some() || cfg.passes.is_some_and(|p| p > 1);
+    install_interrupt_handler(progressive)?;
+    let checkpoint = |passes: u32, film: &photonmap::film::Film| {
+        let written = film.write_exr(&args.output).and_then(|()| match &args.png {
+            Some(png) => film.write_png(png),
+            None => Ok(()),
+        });
+        if let Err(e) = written {
+            eprintln!("photonmap: warning: checkpoint after {passes} passes not written: {e}");
+        }
+    };
+    if args.checkpoint_every == Some(0) {
+        bail!("--checkpoint-every 0: must be at least 1");
+    }
+    let control = integrator::Control {
+        cancel: Some(&STOP),
+        checkpoint: args.checkpoint_every.map(|k| (k, &checkpoint as integrator::progressive::Checkpoint)),
+        started: wall,
+    };
+    let mut output = pool.install(|| integrator::render_scene_with(&scene, &cfg, &progress, control))?;
     output.stats.stages.splice(0..0, load);
     output.stats.scene = args.scene.display().to_string();
     let mut stats = output.stats;
@@ -77,19 +126,21 @@ fn render(args: cli::RenderArgs) -> Result<()> {
         std::fs::write(path, json)
             .with_context(|| format!("{}: could not write the stats", path.display()))?;
     }
-    if !args.quiet {
+    let passes = if stats.passes > 1 { format!(", {} passes", stats.passes) } else { String::new() };
+    if !args.quiet || stats.cancelled {
         eprintln!(
-            "photonmap: {} ({}x{}, {} spp) in {:.2} s with {} on {} threads",
+            "photonmap: {} ({}x{}, {} spp{passes}) in {:.2} s with {} on {} threads{}",
             args.output.display(),
             cfg.width,
             cfg.height,
             cfg.spp,
             stats.wall_seconds,
             stats.accel,
-            stats.threads
+            stats.threads,
+            if stats.cancelled { " (interrupted)" } else { "" }
         );
     }
-    Ok(())
+    Ok(if stats.cancelled { Finished::Interrupted } else { Finished::Done })
 }
 
 fn agree(args: cli::AgreeArgs) -> Result<()> {

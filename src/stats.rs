@@ -59,6 +59,10 @@ pub struct Stats {
     pub threads: usize,
     pub width: u32,
     pub height: u32,
+    /// Passes rendered (progressive modes; 1 otherwise).
+    pub passes: u32,
+    /// Whether a stop request (Ctrl-C) ended the render early.
+    pub cancelled: bool,
     pub stages: Vec<Stage>,
     pub photons: BTreeMap<String, MapStats>,
     pub rays: RayCounts,
@@ -93,6 +97,19 @@ impl Stats {
         let seconds = start.elapsed().as_secs_f64();
         self.stages.push(Stage { name: name.into(), ran: true, reason: reason.into(), seconds });
         out
+    }
+
+    /// Folds stages that ran once per pass into one entry each, in first-run order, with
+    /// their times summed.
+    pub fn merge_repeated_stages(&mut self) {
+        let mut merged: Vec<Stage> = Vec::new();
+        for s in self.stages.drain(..) {
+            match merged.iter_mut().find(|m| m.name == s.name && m.ran == s.ran) {
+                Some(m) => m.seconds += s.seconds,
+                None => merged.push(s),
+            }
+        }
+        self.stages = merged;
     }
 
     /// Seconds spent in the stage `name` (0 if it did not run).

@@ -64,27 +64,9 @@ impl<A: Accel> Shared<'_, A> {
     /// Mean radiance of the samples of pixel `(px, py)`, by the photon mapper or, with
     /// `--integrator path`, the path tracer ([`super::path`]).
     pub fn pixel(&self, px: u32, py: u32, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
-        let spp = self.cfg.spp;
-        // Stratified jitter over a near-square grid of strata, the remainder uniformly random.
-        let side = (spp as f32).sqrt() as u32;
         let mut rays = std::mem::take(&mut scratch.rays);
         let mut hits = std::mem::take(&mut scratch.hits);
-        rays.clear();
-        for s in 0..spp {
-            let (jx, jy) = if s < side * side {
-                ((s % side) as f32 + rng.gen::<f32>(), (s / side) as f32 + rng.gen::<f32>())
-            } else {
-                (rng.gen::<f32>() * side as f32, rng.gen::<f32>() * side as f32)
-            };
-            let fx = px as f32 + jx / side as f32;
-            let fy = py as f32 + jy / side as f32;
-            rays.push(self.scene_camera.ray(fx, fy));
-        }
-        // The pixel's primary rays are coherent: one batch (Embree traces them as packets).
-        hits.clear();
-        hits.resize(rays.len(), None);
-        self.accel.intersect_batch(&rays, &mut hits);
-        c.rays.camera += rays.len() as u64;
+        self.camera_rays(px, py, rng, &mut rays, &mut hits, c);
         let mut sum = Vec3::ZERO;
         let mut good = 0u32;
         let path = self.cfg.integrator == Integrator::Path;
@@ -108,6 +90,37 @@ impl<A: Accel> Shared<'_, A> {
         } else {
             sum / good as f32
         }
+    }
+
+    /// The `spp` primary rays of pixel `(px, py)` (stratified jitter over a near-square grid of
+    /// strata, the remainder uniformly random) and their hits, traced as one coherent batch
+    /// (Embree traces them as packets).
+    pub fn camera_rays(
+        &self,
+        px: u32,
+        py: u32,
+        rng: &mut Pcg32,
+        rays: &mut Vec<Ray>,
+        hits: &mut Vec<Option<Hit>>,
+        c: &mut Counters,
+    ) {
+        let spp = self.cfg.spp;
+        let side = (spp as f32).sqrt() as u32;
+        rays.clear();
+        for s in 0..spp {
+            let (jx, jy) = if s < side * side {
+                ((s % side) as f32 + rng.gen::<f32>(), (s / side) as f32 + rng.gen::<f32>())
+            } else {
+                (rng.gen::<f32>() * side as f32, rng.gen::<f32>() * side as f32)
+            };
+            let fx = px as f32 + jx / side as f32;
+            let fy = py as f32 + jy / side as f32;
+            rays.push(self.scene_camera.ray(fx, fy));
+        }
+        hits.clear();
+        hits.resize(rays.len(), None);
+        self.accel.intersect_batch(rays, hits);
+        c.rays.camera += rays.len() as u64;
     }
 
     /// Radiance arriving along a camera ray.

@@ -6,6 +6,8 @@ pub mod camera;
 pub mod direct;
 pub mod lights;
 pub mod path;
+pub mod progressive;
+pub mod sppm;
 
 use crate::accel::Accel;
 use crate::config::{ColorMode, Integrator, RenderConfig};
@@ -18,6 +20,8 @@ use crate::stats::{MapStats, RayCounts, Stats};
 use camera::Scratch;
 use glam::Vec3;
 use lights::LightSet;
+pub use progressive::Control;
+use progressive::Schedule;
 use rand::SeedableRng;
 use rand_pcg::Pcg32;
 use rayon::prelude::*;
@@ -108,7 +112,8 @@ pub struct RenderOutput {
 struct Ctx<'a, A: Accel> {
     scene: &'a Scene,
     accel: &'a A,
-    cfg: &'a RenderConfig,
+    /// The settings of the pass being rendered (its own seed).
+    cfg: RenderConfig,
     progress: &'a dyn Progress,
     lights: LightSet,
     analysis: Analysis,
@@ -119,13 +124,15 @@ struct Ctx<'a, A: Accel> {
 /// Why a stage is skipped by the path tracer.
 const PATH_TRACER: &str = "path tracer";
 
-/// Renders `scene` with `accel` as `cfg` says. `stats` arrives with the stages already run
-/// (loading, acceleration build) and is completed here.
+/// Renders `scene` with `accel` as `cfg` says, in as many passes as `cfg` and `control` allow.
+/// `stats` arrives with the stages already run (loading, acceleration build) and is completed
+/// here.
 pub fn render<A: Accel>(
     scene: &Scene,
     accel: &A,
     cfg: &RenderConfig,
     progress: &dyn Progress,
+    control: Control<'_>,
     mut stats: Stats,
 ) -> RenderOutput {
     let start = std::time::Instant::now();
@@ -138,30 +145,74 @@ pub fn render<A: Accel>(
         kernel: cfg.kernel,
         flatten: 8.0,
     };
-    let ctx = Ctx {
+    let mut schedule = Schedule::new(cfg, control);
+    let progressive = schedule.is_progressive();
+    // In a progressive render one bar counts the passes; the stages of each pass stay quiet.
+    let inner: &dyn Progress = if progressive { &Quiet } else { progress };
+    let sppm = cfg.integrator == Integrator::Sppm;
+    let mut ctx = Ctx {
         scene,
         accel,
-        cfg,
-        progress,
+        // Progressive photon mapping gathers photons at visible points, not at cached sites.
+        cfg: RenderConfig { irradiance_cache: cfg.irradiance_cache && !sppm, ..cfg.clone() },
+        progress: inner,
         lights,
         analysis,
         gather: params(cfg.gather_photons, cfg.gather_radius, auto_radius),
         caustic_gather: params(cfg.caustic_gather_photons, cfg.caustic_gather_radius, 0.25 * auto_radius),
     };
-    let (indirect, sites) = ctx.indirect_pass(&mut stats);
-    let maps = PhotonMaps { indirect, caustic: ctx.caustic_pass(&mut stats) };
-    let cache = ctx.irradiance_cache(&mut stats, &maps, sites);
+    let camera = scene.camera.with_resolution(cfg.width, cfg.height);
+    let (w, h) = (cfg.width as usize, cfg.height as usize);
+    let mut image = Image {
+        sum: if sppm { Film::new(0, 0) } else { Film::new(w, h) },
+        sppm: if sppm { vec![sppm::PixelState::default(); w * h] } else { Vec::new() },
+        width: w,
+        height: h,
+    };
+    let why_camera = match cfg.integrator {
+        Integrator::Path => "always (path tracer)",
+        Integrator::Photon => "always",
+        Integrator::Sppm => "visible points, direct light and progressive radius updates",
+    };
+    let mut counters = Counters::default();
+    if progressive {
+        progress.start("passes", schedule.progress_total());
+    }
+    while schedule.start_pass() {
+        ctx.cfg.seed = pass_seed(cfg.seed, schedule.done());
+        let (indirect, sites) = ctx.indirect_pass(&mut stats);
+        let maps = PhotonMaps { indirect, caustic: ctx.caustic_pass(&mut stats) };
+        let cache = ctx.irradiance_cache(&mut stats, &maps, sites);
+        let shared = ctx.shared(&maps, &cache, camera);
+        inner.start("camera", cfg.height as u64);
+        counters += stats.run("camera", why_camera, |_| {
+            if sppm {
+                sppm::camera_pass(&shared, &mut image.sppm, cfg.alpha, inner)
+            } else {
+                let (film, c) = camera_pass(&shared, inner);
+                image.add(&film);
+                c
+            }
+        });
+        inner.finish();
+        let (units, due) = schedule.finish_pass();
+        progress.advance(if progressive { units } else { 0 });
+        if due {
+            schedule.checkpoint(&image.film(schedule.done()));
+        }
+    }
+    if progressive {
+        progress.finish();
+    }
+    let film = image.film(schedule.done());
+    stats.passes = schedule.done();
+    stats.cancelled = schedule.cancelled();
+    stats.merge_repeated_stages();
     let photon_seconds = stats.seconds("photons.indirect") + stats.seconds("photons.caustic");
     if photon_seconds > 0.0 {
         let paths: u64 = stats.photons.values().map(|m| m.emitted).sum();
         stats.photons_traced_per_second = paths as f64 / photon_seconds;
     }
-
-    let shared = ctx.shared(&maps, &cache, scene.camera.with_resolution(cfg.width, cfg.height));
-    progress.start("camera", cfg.height as u64);
-    let why_camera = if cfg.integrator == Integrator::Path { "always (path tracer)" } else { "always" };
-    let (film, counters) = stats.run("camera", why_camera, |_| camera_pass(&shared, progress));
-    progress.finish();
     stats.rays += counters.rays;
     stats.gather_queries = counters.queries;
     let camera_seconds = stats.seconds("camera");
@@ -172,11 +223,51 @@ pub fn render<A: Accel>(
     stats.width = cfg.width;
     stats.height = cfg.height;
     stats.wall_seconds += start.elapsed().as_secs_f64();
-    let traced_seconds: f64 = stats.seconds("camera") + photon_seconds;
+    let traced_seconds: f64 = camera_seconds + photon_seconds;
     if traced_seconds > 0.0 {
         stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
     }
     RenderOutput { film, stats }
+}
+
+/// The seed of pass `pass`: the first pass uses the render's own seed, so one pass gives the
+/// same image as a render without passes.
+fn pass_seed(seed: u64, pass: u32) -> u64 {
+    if pass == 0 {
+        seed
+    } else {
+        trace::mix(seed, 0x9A55E5, pass as u64)
+    }
+}
+
+/// The image being built: the sum of the passes' images, or progressive photon mapping's
+/// per-pixel statistics.
+struct Image {
+    sum: Film,
+    sppm: Vec<sppm::PixelState>,
+    width: usize,
+    height: usize,
+}
+
+impl Image {
+    fn add(&mut self, film: &Film) {
+        for (s, p) in self.sum.pixels.iter_mut().zip(&film.pixels) {
+            *s += *p;
+        }
+    }
+
+    /// The image after `passes` passes.
+    fn film(&self, passes: u32) -> Film {
+        if !self.sppm.is_empty() {
+            return sppm::film(&self.sppm, self.width, self.height, passes);
+        }
+        let mut film = self.sum.clone();
+        let scale = 1.0 / passes.max(1) as f32;
+        for p in &mut film.pixels {
+            *p *= scale;
+        }
+        film
+    }
 }
 
 impl<'a, A: Accel> Ctx<'a, A> {
@@ -192,7 +283,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
             accel: self.accel,
             lights: &self.lights,
             maps,
-            cfg: self.cfg,
+            cfg: &self.cfg,
             gather: self.gather,
             caustic_gather: self.caustic_gather,
             cache,
@@ -205,7 +296,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
 
     /// The indirect map, and the photon positions chosen for precomputed irradiance.
     fn indirect_pass(&self, stats: &mut Stats) -> (Vec<PhotonMap>, Vec<irradiance::SitePoint>) {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         let why_not = if cfg.integrator == Integrator::Path {
             Some(PATH_TRACER)
         } else if !self.lit() {
@@ -249,7 +340,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
 
     /// The caustic map, from photons aimed at the specular objects.
     fn caustic_pass(&self, stats: &mut Stats) -> Vec<PhotonMap> {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         let why_not = if cfg.integrator == Integrator::Path {
             Some(PATH_TRACER)
         } else if !self.analysis.has_specular {
@@ -307,10 +398,12 @@ impl<'a, A: Accel> Ctx<'a, A> {
         maps: &PhotonMaps,
         sites: Vec<irradiance::SitePoint>,
     ) -> IrradianceCache {
-        let cfg = self.cfg;
+        let cfg = &self.cfg;
         if sites.is_empty() {
             let why = if cfg.integrator == Integrator::Path {
                 PATH_TRACER
+            } else if cfg.integrator == Integrator::Sppm {
+                "progressive photon mapping gathers at visible points"
             } else if cfg.irradiance_cache {
                 "no indirect photons"
             } else {
@@ -363,6 +456,16 @@ pub fn render_scene(
     cfg: &RenderConfig,
     progress: &dyn Progress,
 ) -> Result<RenderOutput, crate::accel::AccelError> {
+    render_scene_with(scene, cfg, progress, Control::default())
+}
+
+/// [`render_scene`] steered by `control` (cancel flag, checkpoints, start of the time budget).
+pub fn render_scene_with(
+    scene: &Scene,
+    cfg: &RenderConfig,
+    progress: &dyn Progress,
+    control: Control<'_>,
+) -> Result<RenderOutput, crate::accel::AccelError> {
     let mut stats = Stats::default();
     let options = crate::accel::AccelOptions { robust: cfg.robust, ..Default::default() };
     let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
@@ -370,7 +473,7 @@ pub fn render_scene(
         stats.run("accel", reason, |_| crate::accel::AnyAccel::build(cfg.accel, &scene.mesh, options))?;
     stats.accel = accel.name().to_string();
     stats.threads = rayon::current_num_threads();
-    Ok(crate::dispatch!(&accel, a => render(scene, a, cfg, progress, stats)))
+    Ok(crate::dispatch!(&accel, a => render(scene, a, cfg, progress, control, stats)))
 }
 
 /// Packs and balances the maps of one pass.
@@ -393,9 +496,11 @@ fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
     let names = ["r", "g", "b"];
     for (i, m) in maps.iter().enumerate() {
         let name = if maps.len() == 1 { kind.to_string() } else { format!("{kind}.{}", names[i]) };
-        stats
-            .photons
-            .insert(name, MapStats { emitted: m.emitted, stored: m.len() as u64, bytes: m.bytes() as u64 });
+        // Over passes: photons add up; memory is that of the largest map held at once.
+        let e = stats.photons.entry(name).or_default();
+        e.emitted += m.emitted;
+        e.stored += m.len() as u64;
+        e.bytes = e.bytes.max(m.bytes() as u64);
     }
 }
 

@@ -186,6 +186,39 @@ impl PhotonMap {
         (r2 > 0.0).then_some(r2)
     }
 
+    /// Calls `f(wi, power)` for every photon within `radius` of `x` in the region flattened
+    /// along `ns` (unit) by `flatten`, arriving from the side of `ns`; returns how many there
+    /// were. The fixed-radius query of progressive photon mapping.
+    #[inline]
+    pub fn for_each_within(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        radius: f32,
+        flatten: f32,
+        mut f: impl FnMut(Vec3, Vec3),
+    ) -> u32 {
+        let mut count = 0;
+        self.tree.for_each_within_with(x, radius, flattened_metric(ns, flatten), |i, _| {
+            let p = self.tree.get(i);
+            let wi = pack::decode_dir_oct(p.dir);
+            if wi.dot(ns) > 0.0 {
+                count += 1;
+                f(wi, self.power(p));
+            }
+        });
+        count
+    }
+
+    /// Squared distance (in the flattened metric) from `x` to its `k`-th nearest photon, or
+    /// `max_radius²` when fewer than `k` lie within `max_radius`.
+    pub fn knn_radius2(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> f32 {
+        match self.gather(x, ns, params, scratch) {
+            Some(r2) => r2,
+            None => params.max_radius * params.max_radius,
+        }
+    }
+
     /// Stored photons in tree order, unpacked (for tests and tools).
     pub fn photons(&self) -> impl Iterator<Item = PhotonHit> + '_ {
         self.tree.items().iter().map(|p| PhotonHit {

@@ -1,0 +1,180 @@
+//! Passes: the image rendered again with fresh random numbers and averaged (or, with
+//! progressive photon mapping, refined), until a pass count, a time budget or a request to
+//! stop (Ctrl-C) ends it, with the image so far handed out every few passes.
+
+use crate::config::RenderConfig;
+use crate::film::Film;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// Called with the number of passes done and the image so far.
+pub type Checkpoint<'a> = &'a (dyn Fn(u32, &Film) + Sync);
+
+/// How a caller steers a render while it runs.
+#[derive(Clone, Copy)]
+pub struct Control<'a> {
+    /// When set (by a Ctrl-C handler, say), no further pass starts; the image of the passes
+    /// done is returned.
+    pub cancel: Option<&'a AtomicBool>,
+    /// `(k, f)`: `f` gets the image so far after every `k`-th pass (not after the last).
+    pub checkpoint: Option<(u32, Checkpoint<'a>)>,
+    /// When the time budget started (the process start, for `photonmap render`).
+    pub started: Instant,
+}
+
+impl Default for Control<'_> {
+    fn default() -> Self {
+        Control { cancel: None, checkpoint: None, started: Instant::now() }
+    }
+}
+
+impl Control<'_> {
+    fn cancelled(&self) -> bool {
+        self.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
+    }
+}
+
+/// Decides whether another pass starts.
+pub struct Schedule<'a> {
+    passes: Option<u32>,
+    time: Option<f64>,
+    control: Control<'a>,
+    done: u32,
+    /// Time the passes took (setup excluded), to predict the next one.
+    pass_seconds: f64,
+    pass_start: Option<Instant>,
+}
+
+impl<'a> Schedule<'a> {
+    pub fn new(cfg: &RenderConfig, control: Control<'a>) -> Self {
+        Schedule { passes: cfg.passes, time: cfg.time, control, done: 0, pass_seconds: 0.0, pass_start: None }
+    }
+
+    /// Passes finished so far.
+    pub fn done(&self) -> u32 {
+        self.done
+    }
+
+    /// Whether the render is progressive (more than one pass possible): inner stages then
+    /// report no progress of their own.
+    pub fn is_progressive(&self) -> bool {
+        self.time.is_some() || self.passes.is_some_and(|p| p > 1)
+    }
+
+    /// The total the progress bar counts to: passes, or milliseconds of the time budget.
+    pub fn progress_total(&self) -> u64 {
+        match (self.passes, self.time) {
+            (Some(p), None) => p as u64,
+            (_, Some(t)) => (t * 1000.0) as u64,
+            (None, None) => 1,
+        }
+    }
+
+    /// Progress units one finished pass adds.
+    fn progress_units(&self, seconds: f64) -> u64 {
+        if self.time.is_some() {
+            (seconds * 1000.0) as u64
+        } else {
+            1
+        }
+    }
+
+    /// Whether pass number `done()` should start: the first always does; later ones unless
+    /// the pass count is reached, a stop was requested, or the pass would probably end after
+    /// the time budget.
+    pub fn start_pass(&mut self) -> bool {
+        let go = if self.done == 0 {
+            true
+        } else if self.control.cancelled() {
+            false
+        } else {
+            let count_ok = match self.passes {
+                Some(p) => self.done < p,
+                None => self.time.is_some(),
+            };
+            let time_ok = match self.time {
+                Some(t) => {
+                    let mean = self.pass_seconds / self.done as f64;
+                    self.control.started.elapsed().as_secs_f64() + mean <= t
+                }
+                None => true,
+            };
+            count_ok && time_ok
+        };
+        if go {
+            self.pass_start = Some(Instant::now());
+        }
+        go
+    }
+
+    /// Records the end of a pass; returns the progress units it adds and whether the image so
+    /// far is due at a checkpoint.
+    pub fn finish_pass(&mut self) -> (u64, bool) {
+        let seconds = self.pass_start.take().map_or(0.0, |s| s.elapsed().as_secs_f64());
+        self.pass_seconds += seconds;
+        self.done += 1;
+        let due = self.control.checkpoint.is_some_and(|(k, _)| k > 0 && self.done % k == 0);
+        (self.progress_units(seconds), due)
+    }
+
+    /// Hands `film` to the checkpoint callback.
+    pub fn checkpoint(&self, film: &Film) {
+        if let Some((_, f)) = self.control.checkpoint {
+            f(self.done, film);
+        }
+    }
+
+    /// Whether the render stopped because of a cancel request.
+    pub fn cancelled(&self) -> bool {
+        self.control.cancelled()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::RenderSettings;
+
+    fn cfg(passes: Option<u32>, time: Option<f64>) -> RenderConfig {
+        RenderSettings { passes, time, ..Default::default() }.resolve(4, 4).unwrap()
+    }
+
+    fn run(s: &mut Schedule) -> u32 {
+        while s.start_pass() {
+            s.finish_pass();
+        }
+        s.done()
+    }
+
+    #[test]
+    fn counts_passes() {
+        assert_eq!(run(&mut Schedule::new(&cfg(None, None), Control::default())), 1);
+        assert_eq!(run(&mut Schedule::new(&cfg(Some(5), None), Control::default())), 5);
+    }
+
+    #[test]
+    fn stops_at_the_time_budget_and_on_cancel() {
+        // A budget already spent: only the first pass runs.
+        let started = Instant::now() - std::time::Duration::from_secs(10);
+        let control = Control { started, ..Default::default() };
+        assert_eq!(run(&mut Schedule::new(&cfg(Some(100), Some(1.0)), control)), 1);
+        let stop = AtomicBool::new(true);
+        let control = Control { cancel: Some(&stop), ..Default::default() };
+        assert_eq!(run(&mut Schedule::new(&cfg(Some(100), None), control)), 1);
+    }
+
+    #[test]
+    fn checkpoints_every_k_passes() {
+        let seen = std::sync::Mutex::new(Vec::new());
+        let f = |n: u32, _: &Film| seen.lock().unwrap().push(n);
+        let control = Control { checkpoint: Some((2, &f)), ..Default::default() };
+        let mut s = Schedule::new(&cfg(Some(7), None), control);
+        let film = Film::new(1, 1);
+        while s.start_pass() {
+            if s.finish_pass().1 {
+                s.checkpoint(&film);
+            }
+        }
+        assert_eq!(*seen.lock().unwrap(), vec![2, 4, 6]);
+    }
+}
