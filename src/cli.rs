@@ -39,6 +39,9 @@ pub enum Command {
         #[arg(long, default_value_t = 10.0)]
         diff_scale: f32,
     },
+    /// Error against time: render a scene with several methods at several time budgets and
+    /// compare each image with a reference (table, CSV, log-log SVG plot).
+    Converge(ConvergeArgs),
     /// Print what a scene holds: triangles, materials, lights, bounds.
     Info {
         /// Scene file (TOML).
@@ -204,4 +207,37 @@ pub struct AgreeArgs {
     /// Use Embree's robust mode.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub robust: bool,
+}
+
+#[derive(Args, Debug)]
+pub struct ConvergeArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Reference image (EXR); the renders take its size unless --width/--height are given.
+    #[arg(long)]
+    pub reference: PathBuf,
+    /// Box-downsample the reference by this factor first (renders get the smaller size).
+    #[arg(long)]
+    pub downsample: Option<usize>,
+    /// Time budgets in seconds.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32")]
+    pub budgets: Vec<f64>,
+    /// Methods to compare [default: all].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub methods: Vec<photonmap::converge::Method>,
+    /// Write the points as CSV here.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write the log-log plot of RMSE against seconds as SVG here.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Random seed of every render.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Ray-casting backend [default: embree when built with it, else bvh].
+    #[arg(long, value_enum)]
+    pub accel: Option<AccelKind>,
 }

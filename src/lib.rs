@@ -13,6 +13,7 @@
 pub mod accel;
 pub mod agree;
 pub mod config;
+pub mod converge;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -20,6 +21,7 @@ pub mod light;
 pub mod material;
 pub mod montecarlo;
 pub mod photon;
+pub mod plot;
 pub mod sampling;
 pub mod scene;
 pub mod stats;

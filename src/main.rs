@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         },
         Command::Agree(args) => agree(args),
         Command::Info { scene } => info(&scene),
+        Command::Converge(args) => converge(args),
         Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
             compare(&image, &reference, downsample, json, diff.as_deref(), diff_scale)
         }
@@ -198,6 +199,65 @@ fn compare(
         println!("{v}");
     } else {
         println!("rmse {rmse:.5}  rel_mse {rel_mse:.5}  mean {ma:.5} vs {mb:.5} ({:+.2}%)  non-finite pixels {nonfinite}", 100.0 * (ma / mb - 1.0));
+    }
+    Ok(())
+}
+
+fn converge(args: cli::ConvergeArgs) -> Result<()> {
+    use photonmap::converge::{self, Method, Study};
+    use photonmap::film::Film;
+    let scene = Scene::load(&args.scene)?;
+    let mut reference = Film::read_exr(&args.reference)?;
+    if let Some(f) = args.downsample {
+        if f == 0 || reference.width % f != 0 || reference.height % f != 0 {
+            bail!(
+                "--downsample {f} does not divide the reference's {}x{}",
+                reference.width,
+                reference.height
+            );
+        }
+        reference = reference.downsample(f);
+    }
+    if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0 && **b <= 1e6)) {
+        bail!("--budgets: {b} is not a number of seconds in (0, 1e6]");
+    }
+    for out in [args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten() {
+        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+        if !dir.is_dir() {
+            bail!("{}: the directory {} does not exist", out.display(), dir.display());
+        }
+    }
+    let study = Study {
+        methods: if args.methods.is_empty() { Method::ALL.to_vec() } else { args.methods.clone() },
+        budgets: args.budgets.clone(),
+        width: reference.width as u32,
+        height: reference.height as u32,
+        seed: args.seed,
+        overrides: photonmap::config::RenderSettings { accel: args.accel, ..Default::default() },
+    };
+    let pool = pool(args.threads)?;
+    println!("{}", converge::TABLE_HEADER);
+    let points = pool
+        .install(|| converge::run(&scene, &reference, &study, |p| println!("{}", converge::table_row(p))))?;
+    println!();
+    for &m in &study.methods {
+        if let Some(s) = converge::slope(&points, m) {
+            println!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
+        }
+    }
+    if let Some(path) = &args.csv {
+        std::fs::write(path, converge::csv(&points))
+            .with_context(|| format!("{}: could not write the CSV", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        let title = format!(
+            "{} {}x{}: RMSE against time",
+            args.scene.file_stem().unwrap_or_default().to_string_lossy(),
+            study.width,
+            study.height
+        );
+        std::fs::write(path, converge::plot(&points, &title))
+            .with_context(|| format!("{}: could not write the plot", path.display()))?;
     }
     Ok(())
 }

@@ -124,3 +124,57 @@ fn ctrl_c_writes_the_image_so_far() {
     assert!(film.mean() > 0.05, "{}", film.mean());
     assert!(start.elapsed() < Duration::from_secs(60));
 }
+
+/// `photonmap converge` renders every method at every budget and writes the table, the CSV
+/// and the plot.
+#[test]
+fn converge_writes_table_csv_and_plot() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, svg) = (dir.path().join("c.csv"), dir.path().join("c.svg"));
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let output = Command::new(env!("CARGO_BIN_EXE_photonmap"))
+        .arg("converge")
+        .arg(scene_path("cornell"))
+        .arg("--reference")
+        .arg(root.join("tests/data/refs/cornell-64.exr"))
+        .args(["--downsample", "4", "--budgets", "0.05,0.2", "--methods", "sppm,path", "--csv"])
+        .arg(&csv)
+        .arg("--plot")
+        .arg(&svg)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    assert!(output.status.success(), "{stdout}{}", String::from_utf8_lossy(&output.stderr));
+    assert!(stdout.contains("sppm") && stdout.contains("slope"), "{stdout}");
+    let csv = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+    for line in csv.lines().skip(1) {
+        let rmse: f64 = line.split(',').nth(4).unwrap().parse().unwrap();
+        assert!(rmse > 0.0 && rmse < 0.3, "{line}");
+    }
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert_eq!(svg.matches("<polyline").count(), 2);
+}
+
+/// A reference of another size, or a bad budget, is refused with a clear error.
+#[test]
+fn converge_refuses_bad_input() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_photonmap"))
+            .arg("converge")
+            .arg(scene_path("cornell"))
+            .arg("--reference")
+            .arg(root.join("tests/data/refs/cornell-64.exr"))
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    let out = run(&["--downsample", "3"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--downsample 3"));
+    let out = run(&["--budgets=1,0"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--budgets"));
+}

@@ -1,0 +1,255 @@
+//! Error against time: `photonmap converge` renders a scene with several methods at several
+//! time budgets, measures each image against a reference (RMSE and relative MSE over all
+//! pixels and channels), and reports a table, CSV and a log-log plot ([`crate::plot`]).
+//!
+//! Every method runs with `--time budget`: the progressive ones (progressive photon mapping,
+//! the path tracer) refine one image, the two-pass photon-mapping methods average passes of a
+//! fixed size (each pass its own photon maps), so their error falls and then levels off at the
+//! bias of the pass's photon count. The x axis is the measured wall time of the render
+//! (acceleration structure included), which exceeds the budget when one pass takes longer.
+
+use crate::config::{ColorMode, IndirectMode, Integrator, RenderSettings};
+use crate::film::{compare, Film};
+use crate::integrator::{render_scene_with, Control, Quiet};
+use crate::scene::Scene;
+use serde::Serialize;
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// A rendering method: an integrator with the settings of one pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// Two-pass photon mapping, RGB photons, radiance estimate (200k + 50k photons, 16 spp a pass).
+    PhotonRgb,
+    /// The same with the lecture's three per-channel maps.
+    PhotonChannel,
+    /// Two-pass photon mapping with final gathering (200k + 50k photons, 4 spp x 16 rays a pass).
+    FinalGather,
+    /// Stochastic progressive photon mapping (its defaults: 100k + 30k photons, 4 spp a pass).
+    Sppm,
+    /// The path tracer, 4 spp a pass.
+    Path,
+}
+
+impl Method {
+    pub const ALL: [Method; 5] =
+        [Method::PhotonRgb, Method::PhotonChannel, Method::FinalGather, Method::Sppm, Method::Path];
+
+    /// The name used on the command line, in tables and in the CSV.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::PhotonRgb => "photon-rgb",
+            Method::PhotonChannel => "photon-channel",
+            Method::FinalGather => "final-gather",
+            Method::Sppm => "sppm",
+            Method::Path => "path",
+        }
+    }
+
+    /// The settings of one pass (the scene's own `[render]` table fills the rest).
+    pub fn settings(self) -> RenderSettings {
+        let photon = RenderSettings {
+            integrator: Some(Integrator::Photon),
+            photons: Some(200_000),
+            caustic_photons: Some(50_000),
+            spp: Some(16),
+            color: Some(ColorMode::Rgb),
+            indirect: Some(IndirectMode::Estimate),
+            ..Default::default()
+        };
+        match self {
+            Method::PhotonRgb => photon,
+            Method::PhotonChannel => RenderSettings { color: Some(ColorMode::PerChannel), ..photon },
+            Method::FinalGather => RenderSettings {
+                indirect: Some(IndirectMode::FinalGather),
+                final_gather_rays: Some(16),
+                spp: Some(4),
+                ..photon
+            },
+            Method::Sppm => RenderSettings { integrator: Some(Integrator::Sppm), ..Default::default() },
+            Method::Path => {
+                RenderSettings { integrator: Some(Integrator::Path), spp: Some(4), ..Default::default() }
+            }
+        }
+    }
+}
+
+/// One render of the study.
+#[derive(Clone, Debug, Serialize)]
+pub struct Point {
+    pub method: Method,
+    pub budget: f64,
+    /// Measured wall time of the render.
+    pub seconds: f64,
+    pub passes: u32,
+    pub rmse: f64,
+    pub rel_mse: f64,
+    /// Mean of the image over the reference's, minus one.
+    pub bias: f64,
+}
+
+/// What a study needs besides the scene and the reference.
+#[derive(Clone, Debug)]
+pub struct Study {
+    pub methods: Vec<Method>,
+    pub budgets: Vec<f64>,
+    pub width: u32,
+    pub height: u32,
+    pub seed: u64,
+    /// Settings applied over every method's (e.g. `--accel`).
+    pub overrides: RenderSettings,
+}
+
+/// Why a study could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum ConvergeError {
+    #[error("the reference is {0}x{1} but the renders are {2}x{3}")]
+    Size(usize, usize, u32, u32),
+    #[error("{0}")]
+    Config(#[from] crate::config::ConfigError),
+    #[error("{0}")]
+    Accel(#[from] crate::accel::AccelError),
+}
+
+/// Runs every method at every budget, in that order, calling `report` after each render.
+pub fn run(
+    scene: &Scene,
+    reference: &Film,
+    study: &Study,
+    mut report: impl FnMut(&Point),
+) -> Result<Vec<Point>, ConvergeError> {
+    if (reference.width, reference.height) != (study.width as usize, study.height as usize) {
+        return Err(ConvergeError::Size(reference.width, reference.height, study.width, study.height));
+    }
+    let mut points = Vec::new();
+    for &method in &study.methods {
+        for &budget in &study.budgets {
+            let run = RenderSettings { time: Some(budget), seed: Some(study.seed), ..Default::default() };
+            let settings = scene
+                .render
+                .overridden_by(&method.settings())
+                .overridden_by(&study.overrides)
+                .overridden_by(&run);
+            let cfg = settings.resolve(study.width, study.height)?;
+            let started = Instant::now();
+            let control = Control { started, ..Default::default() };
+            let out = render_scene_with(scene, &cfg, &Quiet, control)?;
+            let seconds = started.elapsed().as_secs_f64();
+            let (rmse, rel_mse) = compare(&out.film, reference).expect("sizes checked above");
+            let point = Point {
+                method,
+                budget,
+                seconds,
+                passes: out.stats.passes,
+                rmse,
+                rel_mse,
+                bias: out.film.mean() / reference.mean() - 1.0,
+            };
+            report(&point);
+            points.push(point);
+        }
+    }
+    Ok(points)
+}
+
+/// Least-squares slope of log(RMSE) against log(seconds) for `method` (`None` with fewer than
+/// two points). An unbiased method falls at -0.5. Progressive photon mapping's photon term
+/// falls more slowly in the limit: with radii shrinking as `r² ~ i^(α-1)` over `i` passes its
+/// variance goes as `i^-α` and its squared bias as `i^(2(α-1))` (Knaus & Zwicker 2011), so
+/// with α = 0.7 its RMSE tends to a slope of -0.3 to -0.35, while the camera samples' noise
+/// (direct light, edges) falls at -0.5. A fixed photon count levels off at its bias (slope 0).
+pub fn slope(points: &[Point], method: Method) -> Option<f64> {
+    let xy: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|p| p.method == method && p.seconds > 0.0 && p.rmse > 0.0)
+        .map(|p| (p.seconds.ln(), p.rmse.ln()))
+        .collect();
+    if xy.len() < 2 {
+        return None;
+    }
+    let n = xy.len() as f64;
+    let (mx, my) = (xy.iter().map(|p| p.0).sum::<f64>() / n, xy.iter().map(|p| p.1).sum::<f64>() / n);
+    let sxx: f64 = xy.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = xy.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// The header of [`table_row`]'s table.
+pub const TABLE_HEADER: &str = "method           budget s   time s  passes      rmse   rel_mse     mean";
+
+/// One row of the printed table.
+pub fn table_row(p: &Point) -> String {
+    format!(
+        "{:<16} {:>8.2} {:>8.2} {:>7} {:>9.5} {:>9.5} {:>+7.2}%",
+        p.method.name(),
+        p.budget,
+        p.seconds,
+        p.passes,
+        p.rmse,
+        p.rel_mse,
+        100.0 * p.bias
+    )
+}
+
+/// The points as CSV, with a header line.
+pub fn csv(points: &[Point]) -> String {
+    let mut s = String::from("method,budget_seconds,seconds,passes,rmse,rel_mse,bias\n");
+    for p in points {
+        let _ = writeln!(
+            s,
+            "{},{},{:.4},{},{:.6},{:.6},{:.6}",
+            p.method.name(),
+            p.budget,
+            p.seconds,
+            p.passes,
+            p.rmse,
+            p.rel_mse,
+            p.bias
+        );
+    }
+    s
+}
+
+/// The log-log plot of RMSE against seconds, one line per method.
+pub fn plot(points: &[Point], title: &str) -> String {
+    let series: Vec<crate::plot::Series> = Method::ALL
+        .iter()
+        .filter(|&&m| points.iter().any(|p| p.method == m))
+        .map(|&m| crate::plot::Series {
+            name: match slope(points, m) {
+                Some(s) => format!("{} (slope {s:.2})", m.name()),
+                None => m.name().to_string(),
+            },
+            points: points.iter().filter(|p| p.method == m).map(|p| (p.seconds, p.rmse)).collect(),
+        })
+        .collect();
+    crate::plot::log_log_svg(title, "seconds", "RMSE", &series)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn point(method: Method, seconds: f64, rmse: f64) -> Point {
+        Point { method, budget: seconds, seconds, passes: 1, rmse, rel_mse: 0.0, bias: 0.0 }
+    }
+
+    #[test]
+    fn slope_of_a_power_law() {
+        let pts: Vec<Point> =
+            [1.0, 2.0, 4.0, 8.0].iter().map(|&t| point(Method::Path, t, 0.1 * f64::powf(t, -0.5))).collect();
+        assert!((slope(&pts, Method::Path).unwrap() + 0.5).abs() < 1e-9);
+        assert_eq!(slope(&pts, Method::Sppm), None);
+    }
+
+    #[test]
+    fn csv_and_plot_hold_every_point() {
+        let pts = vec![point(Method::Sppm, 1.0, 0.05), point(Method::Sppm, 2.0, 0.03)];
+        let c = csv(&pts);
+        assert_eq!(c.lines().count(), 3);
+        assert!(c.lines().nth(2).unwrap().starts_with("sppm,2,2.0000,1,0.030000"));
+        let svg = plot(&pts, "t");
+        assert!(svg.starts_with("<svg") && svg.contains("sppm (slope -0.74)"), "{svg}");
+    }
+}
