@@ -30,16 +30,16 @@ fn rmse(name: &str, settings: &RenderSettings) -> (f64, f64) {
 
 /// More passes, less error: on both scenes the error after 32 passes is well below that after
 /// 2, and both the final error and the mean are close to the reference. (Measured at 64x64
-/// with 20k photons per pass: cornell 0.093 → 0.024, caustics 0.105 → 0.033; a lost path or a
+/// with 20k photons per pass: cornell 0.052 → 0.0072, caustics 0.062 → 0.011; a lost path or a
 /// radius update that keeps old flux at the wrong scale stops the fall or shifts the mean by
 /// several per cent.)
 #[test]
 fn sppm_error_falls_with_passes() {
-    for (name, bound) in [("cornell", 0.034), ("caustics", 0.046)] {
+    for (name, bound) in [("cornell", 0.012), ("caustics", 0.018)] {
         let (early, _) = rmse(name, &sppm(2));
         let (late, bias) = rmse(name, &sppm(32));
         eprintln!("{name}: rmse {early:.4} after 2 passes, {late:.4} after 32 (mean {:+.2}%)", 100.0 * bias);
-        assert!(late < 0.5 * early, "{name}: {early} -> {late}");
+        assert!(late < 0.3 * early, "{name}: {early} -> {late}");
         assert!(late < bound, "{name}: rmse {late} >= {bound}");
         assert!(bias.abs() < 0.03, "{name}: mean off by {:.2}%", 100.0 * bias);
     }
@@ -66,8 +66,8 @@ fn sppm_is_deterministic_across_thread_counts() {
     assert_eq!(run(1), run(2));
 }
 
-/// Passes of the path tracer average: 4 passes of 4 samples are as good as 16 samples, and
-/// the stats count the passes.
+/// Passes of the path tracer average (4 passes of 4 samples: measured 0.130 → 0.049, the
+/// camera samples of the passes together staying stratified), and the stats count them.
 #[test]
 fn path_passes_average() {
     let s = scene("cornell");
@@ -85,7 +85,7 @@ fn path_passes_average() {
     let (e1, _) = compare(&one.film, &r).unwrap();
     let (e4, _) = compare(&four.film, &r).unwrap();
     eprintln!("path: rmse {e1:.4} with 1 pass, {e4:.4} with 4");
-    assert!(e4 < 0.75 * e1, "{e1} -> {e4}");
+    assert!(e4 < 0.5 * e1, "{e1} -> {e4}");
 }
 
 fn scene_path(name: &str) -> std::path::PathBuf {

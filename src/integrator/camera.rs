@@ -13,7 +13,7 @@ use crate::photon::irradiance::Irradiance;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use glam::Vec3;
-use rand::Rng;
+use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 
 /// Per-thread scratch buffers reused across pixels.
@@ -66,7 +66,7 @@ impl<A: Accel> Shared<'_, A> {
     pub fn pixel(&self, px: u32, py: u32, rng: &mut Pcg32, scratch: &mut Scratch, c: &mut Counters) -> Vec3 {
         let mut rays = std::mem::take(&mut scratch.rays);
         let mut hits = std::mem::take(&mut scratch.hits);
-        self.camera_rays(px, py, rng, &mut rays, &mut hits, c);
+        self.camera_rays(px, py, &mut rays, &mut hits, c);
         let mut sum = Vec3::ZERO;
         let mut good = 0u32;
         let path = self.cfg.integrator == Integrator::Path;
@@ -92,30 +92,25 @@ impl<A: Accel> Shared<'_, A> {
         }
     }
 
-    /// The `spp` primary rays of pixel `(px, py)` (stratified jitter over a near-square grid of
-    /// strata, the remainder uniformly random) and their hits, traced as one coherent batch
-    /// (Embree traces them as packets).
+    /// The `spp` primary rays of pixel `(px, py)` and their hits, traced as one coherent batch
+    /// (Embree traces them as packets). The positions in the pixel are the pass's stretch of a
+    /// Halton sequence rotated per pixel (the rotation depends on the render's seed and the
+    /// pixel only), so the samples of all passes together stay stratified.
     pub fn camera_rays(
         &self,
         px: u32,
         py: u32,
-        rng: &mut Pcg32,
         rays: &mut Vec<Ray>,
         hits: &mut Vec<Option<Hit>>,
         c: &mut Counters,
     ) {
-        let spp = self.cfg.spp;
-        let side = (spp as f32).sqrt() as u32;
+        let pixel = py as u64 * self.scene_camera.width as u64 + px as u64;
+        let mut rotation = Pcg32::seed_from_u64(crate::photon::trace::mix(self.pixel_seed, 0x5A3D1E, pixel));
+        let offset = [rotation.gen(), rotation.gen()];
         rays.clear();
-        for s in 0..spp {
-            let (jx, jy) = if s < side * side {
-                ((s % side) as f32 + rng.gen::<f32>(), (s / side) as f32 + rng.gen::<f32>())
-            } else {
-                (rng.gen::<f32>() * side as f32, rng.gen::<f32>() * side as f32)
-            };
-            let fx = px as f32 + jx / side as f32;
-            let fy = py as f32 + jy / side as f32;
-            rays.push(self.scene_camera.ray(fx, fy));
+        for s in 0..self.cfg.spp as u64 {
+            let [jx, jy] = crate::sampling::halton2(self.first_sample + s, offset);
+            rays.push(self.scene_camera.ray(px as f32 + jx, py as f32 + jy));
         }
         hits.clear();
         hits.resize(rays.len(), None);

@@ -38,6 +38,10 @@ pub struct Shared<'a, A: Accel> {
     pub caustic_gather: GatherParams,
     /// Precomputed irradiance (empty when disabled or when there is no indirect map).
     pub cache: &'a IrradianceCache,
+    /// Index of this pass's first camera sample in each pixel's sample sequence.
+    pub first_sample: u64,
+    /// The render's seed (not the pass's), for what stays fixed over passes.
+    pub pixel_seed: u64,
 }
 
 /// Per-thread counters, summed at the end (no atomics in hot loops).
@@ -114,6 +118,9 @@ struct Ctx<'a, A: Accel> {
     accel: &'a A,
     /// The settings of the pass being rendered (its own seed).
     cfg: RenderConfig,
+    /// The pass being rendered and the render's seed.
+    pass: u32,
+    seed: u64,
     progress: &'a dyn Progress,
     lights: LightSet,
     analysis: Analysis,
@@ -156,6 +163,8 @@ pub fn render<A: Accel>(
         // Progressive photon mapping gathers photons at visible points, not at cached sites.
         cfg: RenderConfig { irradiance_cache: cfg.irradiance_cache && !sppm, ..cfg.clone() },
         progress: inner,
+        pass: 0,
+        seed: cfg.seed,
         lights,
         analysis,
         gather: params(cfg.gather_photons, cfg.gather_radius, auto_radius),
@@ -179,7 +188,8 @@ pub fn render<A: Accel>(
         progress.start("passes", schedule.progress_total());
     }
     while schedule.start_pass() {
-        ctx.cfg.seed = pass_seed(cfg.seed, schedule.done());
+        ctx.pass = schedule.done();
+        ctx.cfg.seed = pass_seed(cfg.seed, ctx.pass);
         let (indirect, sites) = ctx.indirect_pass(&mut stats);
         let maps = PhotonMaps { indirect, caustic: ctx.caustic_pass(&mut stats) };
         let cache = ctx.irradiance_cache(&mut stats, &maps, sites);
@@ -287,6 +297,8 @@ impl<'a, A: Accel> Ctx<'a, A> {
             gather: self.gather,
             caustic_gather: self.caustic_gather,
             cache,
+            first_sample: self.pass as u64 * self.cfg.spp as u64,
+            pixel_seed: self.seed,
         }
     }
 

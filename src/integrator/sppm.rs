@@ -115,7 +115,7 @@ fn update_pixel<A: Accel>(
 ) {
     let mut rays = std::mem::take(&mut scratch.rays);
     let mut hits = std::mem::take(&mut scratch.hits);
-    s.camera_rays(px, py, rng, &mut rays, &mut hits, c);
+    s.camera_rays(px, py, &mut rays, &mut hits, c);
     let (mut sum, mut good) = (Vec3::ZERO, 0u32);
     let mut first = None;
     for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
