@@ -187,6 +187,10 @@ pub const SPPM_PHOTONS: u64 = 100_000;
 pub const SPPM_CAUSTIC_PHOTONS: u64 = 30_000;
 pub const SPPM_SPP: u32 = 4;
 pub const SPPM_PASSES: u32 = 64;
+/// Progressive photon mapping's first radius reaches this many photons (fewer than the
+/// two-pass estimate's 100: the radius only shrinks from there, so a small start means less
+/// early bias and cheaper range queries).
+pub const SPPM_GATHER_PHOTONS: u32 = 30;
 
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
 pub const BYTES_PER_PHOTON: u64 = 20;
@@ -226,7 +230,7 @@ impl RenderSettings {
             seed: self.seed.unwrap_or(1),
             max_bounces: self.max_bounces.unwrap_or(64),
             max_depth: self.max_depth.unwrap_or(16),
-            gather_photons: self.gather_photons.unwrap_or(100),
+            gather_photons: self.gather_photons.unwrap_or(if sppm { SPPM_GATHER_PHOTONS } else { 100 }),
             gather_radius: self.gather_radius,
             caustic_gather_photons: self.caustic_gather_photons.unwrap_or(60),
             caustic_gather_radius: self.caustic_gather_radius,
