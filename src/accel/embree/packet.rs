@@ -66,7 +66,11 @@ impl Scene {
             // aligned (checked above) and every active lane holds a finite interval.
             unsafe { query.intersect8(valid.0.as_ptr(), self.raw(), &mut rh) };
             for (lane, hit) in hits.iter_mut().enumerate() {
-                *hit = (valid.0[lane] != 0 && rh.hit.geomID[lane] != INVALID_ID).then(|| Hit {
+                let found = valid.0[lane] != 0 && rh.hit.geomID[lane] != INVALID_ID;
+                // A hit outside the ray's interval (never seen; Embree promises none) is dropped.
+                let t = rh.ray.tfar[lane];
+                let ray = &rays[lane];
+                *hit = (found && t >= ray.t_min && t <= ray.t_max && t.is_finite()).then(|| Hit {
                     t: rh.ray.tfar[lane],
                     prim: rh.hit.primID[lane],
                     u: rh.hit.u[lane],

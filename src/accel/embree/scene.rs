@@ -149,7 +149,9 @@ impl Scene {
         // SAFETY: `self.raw` is a live committed scene.
         unsafe { Query::new(false).intersect1(self.raw, &mut rh) };
         let hit = Hit { t: rh.ray.tfar, prim: rh.hit.primID, u: rh.hit.u, v: rh.hit.v };
-        (rh.hit.geomID != INVALID_ID).then_some(hit)
+        // A hit outside the ray's interval (never seen; Embree promises none) is dropped.
+        let inside = hit.t >= ray.t_min && hit.t <= ray.t_max && hit.t.is_finite();
+        (rh.hit.geomID != INVALID_ID && inside).then_some(hit)
     }
 
     /// Whether anything is hit in `(t_min, t_max)` (`rtcOccluded1` sets `tfar` to -inf then).
