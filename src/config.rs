@@ -254,10 +254,21 @@ impl RenderSettings {
 impl RenderConfig {
     fn validate(&self) -> Result<(), ConfigError> {
         let side = crate::scene::MAX_IMAGE_SIDE;
-        if self.width == 0 || self.height == 0 || self.width > side || self.height > side {
+        if self.width == 0 || self.height == 0 {
             return Err(bad(
                 "width/height",
-                format!("{}x{} is not within 1..={side} per side", self.width, self.height),
+                format!("{}x{}: both must be at least 1", self.width, self.height),
+            ));
+        }
+        if self.width > side || self.height > side {
+            // A float RGB film is 12 bytes a pixel, before any per-pixel render state.
+            let gb = self.width as f64 * self.height as f64 * 12.0 / 1e9;
+            return Err(bad(
+                "width/height",
+                format!(
+                    "{}x{} would need about {gb:.1} GB for the film alone; at most {side} per side",
+                    self.width, self.height
+                ),
             ));
         }
         for (field, n) in [("photons", self.photons), ("caustic_photons", self.caustic_photons)] {

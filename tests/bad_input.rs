@@ -74,7 +74,7 @@ fn cases() -> Vec<Case> {
         Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
         Case {
             flags: &[("--width", "1000000")],
-            ..case("--width 1000000", &["cornell.toml", "width", "1000000"])
+            ..case("--width 1000000", &["cornell.toml", "width", "1000000", "GB"])
         },
         Case {
             flags: &[("--photons", "1000000000000")],
