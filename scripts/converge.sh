@@ -1,16 +1,17 @@
 #!/usr/bin/env bash
 # Error against time on the four canonical scenes: runs `photonmap converge` with every method
 # at every budget against the 256x256 references and writes docs/converge/<scene>.{csv,svg}
-# (and a PNG of each plot when rsvg-convert is installed), printing the tables.
+# (and a PNG of each plot when rsvg-convert is installed), printing the tables; other renderers'
+# figures from docs/converge/peers.csv are drawn dashed and raced at equal time.
 # Usage: bash scripts/converge.sh [REFS_DIR] [BUDGETS] [METHODS]
 #   REFS_DIR  directory of the reference EXRs (default ../shared/scenes/refs)
-#   BUDGETS   seconds, comma-separated (default 1,2,4,8,16,32)
+#   BUDGETS   seconds, comma-separated (default 1,2,5,10,20,45: the peers' 5, 20 and 45 s among them)
 #   METHODS   comma-separated (default all: photon-rgb,photon-channel,final-gather,sppm,path)
 # SCENES="cornell caustics" limits the scenes; OUT=dir changes the output directory.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 refs=${1:-../shared/scenes/refs}
-budgets=${2:-1,2,4,8,16,32}
+budgets=${2:-1,2,5,10,20,45}
 methods=${3:-photon-rgb,photon-channel,final-gather,sppm,path}
 out=${OUT:-docs/converge}
 mkdir -p "$out"
@@ -18,7 +19,8 @@ cargo build --release --locked -q
 for s in ${SCENES:-cornell caustics pointlight furnace}; do
     echo "== $s (budgets $budgets s)"
     ./target/release/photonmap converge "scenes/$s/$s.toml" --reference "$refs/$s.exr" \
-        --budgets "$budgets" --methods "$methods" --csv "$out/$s.csv" --plot "$out/$s.svg"
+        --budgets "$budgets" --methods "$methods" --csv "$out/$s.csv" --plot "$out/$s.svg" \
+        --peers docs/converge/peers.csv
     if command -v rsvg-convert >/dev/null; then
         rsvg-convert "$out/$s.svg" -o "$out/$s.png"
     fi

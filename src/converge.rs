@@ -211,9 +211,98 @@ pub fn csv(points: &[Point]) -> String {
     s
 }
 
-/// The log-log plot of RMSE against seconds, one line per method.
-pub fn plot(points: &[Point], title: &str) -> String {
-    let series: Vec<crate::plot::Series> = Method::ALL
+/// An error measured elsewhere, for comparison: another renderer's RMSE against the same
+/// reference after `seconds` on the same kind of machine.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Peer {
+    pub renderer: String,
+    pub seconds: f64,
+    pub rmse: f64,
+}
+
+/// Why a peers file was refused.
+#[derive(Debug, thiserror::Error)]
+#[error("line {line}: {msg}")]
+pub struct PeersError {
+    pub line: usize,
+    pub msg: String,
+}
+
+/// Reads the peers of scene `scene` from CSV text with the header `scene,renderer,seconds,rmse`
+/// (rows of other scenes are skipped; `#` starts a comment line).
+pub fn parse_peers(text: &str, scene: &str) -> Result<Vec<Peer>, PeersError> {
+    let err = |line: usize, msg: String| PeersError { line, msg };
+    let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    match rows.next() {
+        Some((_, h)) if h.trim() == "scene,renderer,seconds,rmse" => {}
+        Some((i, h)) => {
+            return Err(err(i + 1, format!("expected the header `scene,renderer,seconds,rmse`, found `{h}`")))
+        }
+        None => return Err(err(1, "empty file".into())),
+    }
+    let mut peers = Vec::new();
+    for (i, l) in rows {
+        let f: Vec<&str> = l.split(',').map(str::trim).collect();
+        if f.len() != 4 {
+            return Err(err(i + 1, format!("expected 4 fields, found {}", f.len())));
+        }
+        let num = |k: usize, what: &str| match f[k].parse::<f64>() {
+            Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+            _ => Err(err(i + 1, format!("{what} `{}` is not a positive number", f[k]))),
+        };
+        let (seconds, rmse) = (num(2, "seconds")?, num(3, "rmse")?);
+        if f[0] == scene {
+            peers.push(Peer { renderer: f[1].to_string(), seconds, rmse });
+        }
+    }
+    Ok(peers)
+}
+
+/// One line of the equal-time race: a peer's figure and the lowest error any method reached
+/// here in at most the same time (`None` when no render was that fast).
+#[derive(Clone, Debug, Serialize)]
+pub struct Race<'a> {
+    pub peer: &'a Peer,
+    pub best: Option<&'a Point>,
+}
+
+/// For each peer figure, the best point measured within the peer's time.
+pub fn race<'a>(points: &'a [Point], peers: &'a [Peer]) -> Vec<Race<'a>> {
+    peers
+        .iter()
+        .map(|peer| Race {
+            peer,
+            best: points
+                .iter()
+                .filter(|p| p.seconds <= peer.seconds)
+                .min_by(|a, b| a.rmse.total_cmp(&b.rmse)),
+        })
+        .collect()
+}
+
+/// The header of [`race_row`]'s table.
+pub const RACE_HEADER: &str =
+    "peer                                 s   peer rmse   best here          s      rmse   peer/here";
+
+/// One row of the equal-time race table.
+pub fn race_row(r: &Race<'_>) -> String {
+    let head = format!("{:<32} {:>6.1} {:>11.4}", r.peer.renderer, r.peer.seconds, r.peer.rmse);
+    match r.best {
+        Some(p) => format!(
+            "{head}   {:<14} {:>6.2} {:>9.4} {:>10.2}x",
+            p.method.name(),
+            p.seconds,
+            p.rmse,
+            r.peer.rmse / p.rmse
+        ),
+        None => format!("{head}   (no render was this fast)"),
+    }
+}
+
+/// The log-log plot of RMSE against seconds, one line per method, and one dashed line per
+/// peer renderer.
+pub fn plot(points: &[Point], peers: &[Peer], title: &str) -> String {
+    let mut series: Vec<crate::plot::Series> = Method::ALL
         .iter()
         .filter(|&&m| points.iter().any(|p| p.method == m))
         .map(|&m| crate::plot::Series {
@@ -222,8 +311,18 @@ pub fn plot(points: &[Point], title: &str) -> String {
                 None => m.name().to_string(),
             },
             points: points.iter().filter(|p| p.method == m).map(|p| (p.seconds, p.rmse)).collect(),
+            dashed: false,
         })
         .collect();
+    let mut names: Vec<&str> = peers.iter().map(|p| p.renderer.as_str()).collect();
+    names.dedup();
+    for name in names {
+        series.push(crate::plot::Series {
+            name: name.to_string(),
+            points: peers.iter().filter(|p| p.renderer == name).map(|p| (p.seconds, p.rmse)).collect(),
+            dashed: true,
+        });
+    }
     crate::plot::log_log_svg(title, "seconds", "RMSE", &series)
 }
 
@@ -249,7 +348,39 @@ mod tests {
         let c = csv(&pts);
         assert_eq!(c.lines().count(), 3);
         assert!(c.lines().nth(2).unwrap().starts_with("sppm,2,2.0000,1,0.030000"));
-        let svg = plot(&pts, "t");
+        let peers = vec![Peer { renderer: "other".into(), seconds: 1.5, rmse: 0.1 }];
+        let svg = plot(&pts, &peers, "t");
         assert!(svg.starts_with("<svg") && svg.contains("sppm (slope -0.74)"), "{svg}");
+        assert!(svg.contains(">other</text>") && svg.contains("stroke-dasharray"), "{svg}");
+    }
+
+    #[test]
+    fn peers_are_read_for_one_scene_and_bad_rows_are_named() {
+        let text = "# measured elsewhere\nscene,renderer,seconds,rmse\ncornell,A,5,0.02\ncaustics,A,5,0.09\ncornell,A,20,0.01\n";
+        let peers = parse_peers(text, "cornell").unwrap();
+        assert_eq!(peers.len(), 2);
+        assert_eq!(peers[1], Peer { renderer: "A".into(), seconds: 20.0, rmse: 0.01 });
+        let e = parse_peers("scene,renderer,seconds,rmse\ncornell,A,five,0.02\n", "cornell").unwrap_err();
+        assert_eq!((e.line, e.msg.contains("`five`")), (2, true), "{e}");
+        assert_eq!(parse_peers("a,b\n", "cornell").unwrap_err().line, 1);
+        assert_eq!(parse_peers("scene,renderer,seconds,rmse\ncornell,A,1\n", "cornell").unwrap_err().line, 2);
+    }
+
+    #[test]
+    fn the_race_takes_the_best_point_within_the_peers_time() {
+        let pts = vec![
+            point(Method::Sppm, 1.0, 0.05),
+            point(Method::Path, 4.0, 0.02),
+            point(Method::Sppm, 6.0, 0.01),
+        ];
+        let peers = vec![
+            Peer { renderer: "A".into(), seconds: 5.0, rmse: 0.04 },
+            Peer { renderer: "A".into(), seconds: 0.5, rmse: 0.5 },
+        ];
+        let r = race(&pts, &peers);
+        assert_eq!(r[0].best.map(|p| (p.method, p.rmse)), Some((Method::Path, 0.02)));
+        assert!(race_row(&r[0]).ends_with("2.00x"), "{}", race_row(&r[0]));
+        assert!(r[1].best.is_none());
+        assert!(race_row(&r[1]).contains("no render"));
     }
 }

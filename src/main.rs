@@ -227,6 +227,14 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
             bail!("{}: the directory {} does not exist", out.display(), dir.display());
         }
     }
+    let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
+    let peers = match &args.peers {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
+            converge::parse_peers(&text, &stem).with_context(|| format!("{}", path.display()))?
+        }
+        None => Vec::new(),
+    };
     let study = Study {
         methods: if args.methods.is_empty() { Method::ALL.to_vec() } else { args.methods.clone() },
         budgets: args.budgets.clone(),
@@ -245,18 +253,20 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
             println!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
         }
     }
+    if !peers.is_empty() {
+        println!("\nequal time: the lowest error of any method here within each peer's time");
+        println!("{}", converge::RACE_HEADER);
+        for r in converge::race(&points, &peers) {
+            println!("{}", converge::race_row(&r));
+        }
+    }
     if let Some(path) = &args.csv {
         std::fs::write(path, converge::csv(&points))
             .with_context(|| format!("{}: could not write the CSV", path.display()))?;
     }
     if let Some(path) = &args.plot {
-        let title = format!(
-            "{} {}x{}: RMSE against time",
-            args.scene.file_stem().unwrap_or_default().to_string_lossy(),
-            study.width,
-            study.height
-        );
-        std::fs::write(path, converge::plot(&points, &title))
+        let title = format!("{stem} {}x{}: RMSE against time", study.width, study.height);
+        std::fs::write(path, converge::plot(&points, &peers, &title))
             .with_context(|| format!("{}: could not write the plot", path.display()))?;
     }
     Ok(())

@@ -8,6 +8,9 @@ use std::fmt::Write as _;
 pub struct Series {
     pub name: String,
     pub points: Vec<(f64, f64)>,
+    /// Drawn dashed with hollow markers (for figures measured elsewhere, such as other
+    /// renderers').
+    pub dashed: bool,
 }
 
 const W: f64 = 720.0;
@@ -134,19 +137,25 @@ pub fn log_log_svg(title: &str, x_label: &str, y_label: &str, series: &[Series])
             .collect();
         pts.sort_by(|a, b| a.0.total_cmp(&b.0));
         let path: Vec<String> = pts.iter().map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y))).collect();
+        let dash = if ser.dashed { r#" stroke-dasharray="6 4""# } else { "" };
         let _ = writeln!(
             s,
-            r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"/>"#,
+            r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="2"{dash}/>"#,
             path.join(" ")
         );
+        let fill = if ser.dashed {
+            format!(r#"fill="white" stroke="{color}" stroke-width="1.5""#)
+        } else {
+            format!(r#"fill="{color}""#)
+        };
         for &(x, y) in &pts {
-            let _ = writeln!(s, r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" fill="{color}"/>"#, sx(x), sy(y));
+            let _ = writeln!(s, r#"<circle cx="{:.1}" cy="{:.1}" r="3.5" {fill}/>"#, sx(x), sy(y));
         }
         let ly = TOP + 10.0 + 20.0 * i as f64;
         let lx = LEFT + pw + 15.0;
         let _ = writeln!(
             s,
-            r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"/><text x="{}" y="{ly}" dominant-baseline="middle">{}</text>"#,
+            r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="2"{dash}/><text x="{}" y="{ly}" dominant-baseline="middle">{}</text>"#,
             lx + 22.0,
             lx + 28.0,
             escape(&ser.name)
@@ -169,9 +178,13 @@ mod tests {
 
     #[test]
     fn points_land_inside_the_frame() {
-        let series = vec![Series { name: "a<b".into(), points: vec![(1.0, 0.1), (30.0, 0.01)] }];
+        let series = vec![
+            Series { name: "a<b".into(), points: vec![(1.0, 0.1), (30.0, 0.01)], dashed: false },
+            Series { name: "peer".into(), points: vec![(5.0, 0.05)], dashed: true },
+        ];
         let svg = log_log_svg("t", "x", "y", &series);
         assert!(svg.contains("a&lt;b"));
+        assert_eq!(svg.matches("stroke-dasharray").count(), 2, "the peer's line and legend are dashed");
         for c in svg.split("<circle").skip(1) {
             let cx: f64 = c.split("cx=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
             let cy: f64 = c.split("cy=\"").nth(1).unwrap().split('"').next().unwrap().parse().unwrap();
