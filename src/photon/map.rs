@@ -142,12 +142,13 @@ impl PhotonMap {
             return self.irradiance(x, ns, params, scratch) * kd * std::f32::consts::FRAC_1_PI;
         }
         let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
+        let inv_r2 = 1.0 / r2;
         let mut sum = Vec3::ZERO;
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
             let wi = pack::decode_dir_oct(p.dir);
             if wi.dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 / r2) * m.eval(n, wo, wi) * self.power(p);
+                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * m.eval(n, wo, wi) * self.power(p);
             }
         }
         sum / (PI * r2)
@@ -157,11 +158,12 @@ impl PhotonMap {
     /// Lambertian surfaces and precomputed irradiance (Christensen 1999).
     pub fn irradiance(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Vec3 {
         let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
+        let inv_r2 = 1.0 / r2;
         let mut sum = Vec3::ZERO;
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
-            if pack::decode_dir_oct(p.dir).dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 / r2) * self.power(p);
+            if pack::decode_dir_oct_unnormalized(p.dir).dot(ns) > 0.0 {
+                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.power(p);
             }
         }
         sum / (PI * r2)

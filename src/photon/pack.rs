@@ -50,6 +50,13 @@ pub fn encode_dir_oct(d: Vec3) -> u32 {
 
 /// Decodes [`encode_dir_oct`]'s output into a unit vector.
 pub fn decode_dir_oct(bits: u32) -> Vec3 {
+    decode_dir_oct_unnormalized(bits).normalize()
+}
+
+/// [`decode_dir_oct`] without the final normalisation: a positive multiple of the direction,
+/// enough for the sign of a dot product (the gathers' back-side test).
+#[inline]
+pub fn decode_dir_oct_unnormalized(bits: u32) -> Vec3 {
     let (x, y) = (dequantize_snorm16(bits & 0xffff), dequantize_snorm16(bits >> 16));
     let z = 1.0 - x.abs() - y.abs();
     let (x, y) = if z < 0.0 {
@@ -57,7 +64,7 @@ pub fn decode_dir_oct(bits: u32) -> Vec3 {
     } else {
         (x, y)
     };
-    Vec3::new(x, y, z).normalize()
+    Vec3::new(x, y, z)
 }
 
 const RGB9E5_MANTISSA_BITS: i32 = 9;
