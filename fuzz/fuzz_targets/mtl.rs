@@ -1,0 +1,4 @@
+//! libFuzzer target: the Cornell box with its MTL file replaced by arbitrary bytes.
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| photonmap_fuzz::check(2, data));
