@@ -100,6 +100,17 @@ pub fn rgb9e5_encode(rgb: Vec3) -> u32 {
     q(r) | (q(g) << 9) | (q(b) << 18) | ((exp as u32) << 27)
 }
 
+/// A power of two that divides `max` into about `(2^14, 2^15]`, the top of RGB9E5's range
+/// (1 for zero, negative or non-finite `max`): values of any magnitude up to `max`, divided by
+/// it, pack with [`rgb9e5_encode`] without saturating, keep 2^30 of dynamic range below `max`
+/// and round alike at every scale (the division is exact).
+pub fn rgb9e5_scale(max: f32) -> f32 {
+    if !(max > 0.0 && max.is_finite()) {
+        return 1.0;
+    }
+    exp2i((max.log2().ceil() as i32 - 15).clamp(-126, 127))
+}
+
 /// Unpacks [`rgb9e5_encode`]'s output.
 pub fn rgb9e5_decode(bits: u32) -> Vec3 {
     let exp = (bits >> 27) as i32;
