@@ -23,13 +23,17 @@ pub const SHADOW_MARGIN: f32 = 1e-4;
 /// Whether the segment from the surface at `hit` toward the light sample `ls` is unblocked. It
 /// leaves from a robust origin and stops short of the sampled point by that point's rounding
 /// error (`ls.end_error`, as pbrt-v4's `SpawnRayTo` offsets both ends), then by
-/// [`SHADOW_MARGIN`].
+/// [`SHADOW_MARGIN`]. A light point within rounding distance is visible: nothing between the
+/// two can be resolved.
 #[inline]
 pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, ls: &LightSample, c: &mut Counters) -> bool {
     c.rays.shadow += 1;
     let origin = hit.spawn(ls.wi);
-    let t_max =
-        if ls.dist.is_finite() { (ls.dist - ls.end_error) * (1.0 - SHADOW_MARGIN) } else { f32::INFINITY };
+    let t_max = if ls.dist.is_finite() {
+        (ls.dist - ls.end_error).max(0.0) * (1.0 - SHADOW_MARGIN)
+    } else {
+        f32::INFINITY
+    };
     !s.accel.occluded(&Ray::segment(origin, ls.wi, 0.0, t_max))
 }
 

@@ -126,7 +126,7 @@ impl AreaLights {
         let pdf = pmf / tri.area * dist2 / cos_light;
         // Twice the offset: room for its final rounding by a float per coordinate.
         let end_error = 2.0 * offset_distance(q, err, tri.normal) / cos_light;
-        (pdf.is_finite() && pdf > 0.0 && end_error < dist).then_some(LightSample {
+        (pdf.is_finite() && pdf > 0.0).then_some(LightSample {
             wi,
             dist,
             end_error,
