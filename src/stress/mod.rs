@@ -100,7 +100,7 @@ pub fn run(filter: Option<&str>, opts: &StressOptions, mut on_row: impl FnMut(&R
 /// The table's header line.
 pub fn table_header() -> String {
     format!(
-        "{:<22} {:<10} {:<34} {:<22} {:<40} {:>9} {:>7}  result",
+        "{:<22} {:<10} {:<34} {:<30} {:<46} {:>9} {:>7}  result",
         "case", "accel", "check", "expected", "measured", "nonfinite", "seconds"
     )
 }
@@ -108,7 +108,7 @@ pub fn table_header() -> String {
 /// One line of the table.
 pub fn table_row(r: &Row) -> String {
     format!(
-        "{:<22} {:<10} {:<34} {:<22} {:<40} {:>9} {:>7.2}  {}",
+        "{:<22} {:<10} {:<34} {:<30} {:<46} {:>9} {:>7.2}  {}",
         r.case,
         r.accel,
         r.check,
