@@ -105,7 +105,7 @@ fn uniform(
 /// far outside that, while Gaussian noise passes 6 σ on all 6144 values (2 images × 1024
 /// pixels × 3 channels) with probability above 1 − 10⁻⁴.
 fn furnace(opts: &StressOptions) -> Vec<Row> {
-    let (spp, photons) = if opts.quick { (8, 20_000) } else { (16, 200_000) };
+    let (spp, photons) = if opts.quick { (8, 20_000) } else { (16, 100_000) };
     let variants = [
         ("x1e-4", 1e-4, Vec3::ZERO),
         ("x1", 1.0, Vec3::ZERO),
