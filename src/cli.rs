@@ -42,6 +42,10 @@ pub enum Command {
     /// Error against time: render a scene with several methods at several time budgets and
     /// compare each image with a reference (table, CSV, log-log SVG plot).
     Converge(ConvergeArgs),
+    /// Run the stress suite (numerical stability: extreme scales, grazing light, coplanar
+    /// surfaces, closed boxes, extreme powers, a million photons on a point, a million slivers)
+    /// and print a table; exits non-zero if any check fails.
+    Stress(StressArgs),
     /// Print what a scene holds: triangles, materials, lights, bounds.
     Info {
         /// Scene file (TOML).
@@ -245,4 +249,28 @@ pub struct ConvergeArgs {
     /// Ray-casting backend [default: embree when built with it, else bvh].
     #[arg(long, value_enum)]
     pub accel: Option<AccelKind>,
+}
+
+#[derive(Args, Debug)]
+pub struct StressArgs {
+    /// Run only the cases whose name contains this (furnace, grazing, coplanar, touching,
+    /// camera-inside, light-inside, back-facing, power, duplicates, zero-photons, one-triangle,
+    /// slivers).
+    #[arg(long)]
+    pub filter: Option<String>,
+    /// Render with these backends only [default: embree and bvh, or bvh without Embree].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub accel: Vec<AccelKind>,
+    /// Rays per backend-agreement check (0 skips them).
+    #[arg(long, default_value_t = 10_000)]
+    pub agree_rays: usize,
+    /// Fewer samples and photons (what `tests/stress.rs` runs).
+    #[arg(long)]
+    pub quick: bool,
+    /// Print the rows as JSON lines instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
 }

@@ -25,3 +25,4 @@ pub mod plot;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod stress;

@@ -1,4 +1,4 @@
-//! The `photonmap` command: render, agree, info.
+//! The `photonmap` command: render, agree, compare, converge, stress, info.
 
 mod cli;
 mod progress;
@@ -25,6 +25,7 @@ fn main() -> ExitCode {
         },
         Command::Agree(args) => agree(args),
         Command::Info { scene } => info(&scene),
+        Command::Stress(args) => stress(args),
         Command::Converge(args) => converge(args),
         Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
             compare(&image, &reference, downsample, json, diff.as_deref(), diff_scale)
@@ -268,6 +269,42 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
         let title = format!("{stem} {}x{}: RMSE against time", study.width, study.height);
         std::fs::write(path, converge::plot(&points, &peers, &title))
             .with_context(|| format!("{}: could not write the plot", path.display()))?;
+    }
+    Ok(())
+}
+
+fn stress(args: cli::StressArgs) -> Result<()> {
+    use photonmap::stress;
+    let mut opts =
+        stress::StressOptions { agree_rays: args.agree_rays, quick: args.quick, ..Default::default() };
+    if !args.accel.is_empty() {
+        opts.accels = args.accel.clone();
+    }
+    let filter = args.filter.as_deref();
+    if let Some(f) = filter {
+        if !stress::cases().iter().any(|c| c.name.contains(f)) {
+            bail!("--filter {f}: no case matches");
+        }
+    }
+    if !args.json {
+        println!("{}", stress::table_header());
+    }
+    let wall = Instant::now();
+    let rows = pool(args.threads)?.install(|| {
+        stress::run(filter, &opts, |row| {
+            if args.json {
+                println!("{}", serde_json::to_string(row).unwrap_or_default());
+            } else {
+                println!("{}", stress::table_row(row));
+            }
+        })
+    });
+    let failed = rows.iter().filter(|r| !r.pass).count();
+    if !args.json {
+        println!("{} checks, {failed} failed, {:.1} s", rows.len(), wall.elapsed().as_secs_f64());
+    }
+    if failed > 0 {
+        bail!("{failed} of {} stress checks failed", rows.len());
     }
     Ok(())
 }

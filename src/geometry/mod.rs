@@ -12,6 +12,8 @@ mod ray;
 
 pub use aabb::Aabb;
 pub use mesh::{MeshError, TriangleMesh};
-pub use ray::{barycentric_error, gamma, next_float_down, next_float_up, offset_ray_origin, Ray};
+pub use ray::{
+    barycentric_error, gamma, next_float_down, next_float_up, offset_distance, offset_ray_origin, Ray,
+};
 
 pub use glam::Vec3;

@@ -47,6 +47,14 @@ pub fn barycentric_error(v: [Vec3; 3], b: [f32; 3]) -> Vec3 {
     gamma(7) * ((b[0] * v[0]).abs() + (b[1] * v[1]).abs() + (b[2] * v[2]).abs())
 }
 
+/// How far [`offset_ray_origin`] moves `p` along `n`, before its final rounding (which adds at
+/// most one float per coordinate).
+#[inline]
+pub fn offset_distance(p: Vec3, err: Vec3, n: Vec3) -> f32 {
+    // (1e-30: a point exactly at the world origin still moves, by a normal float.)
+    n.abs().dot(err).max(gamma(7) * p.abs().max_element()).max(1e-30)
+}
+
 /// Moves `p`, a point on a surface with unit normal `n` and absolute error bound `err`, off the
 /// surface to the side `n` points to (pbrt-v4 `OffsetRayOrigin`, Pharr, Jakob & Humphreys,
 /// *Physically Based Rendering*, 4th ed., 6.8.6): by `|n| . err` along `n`, then each moved
@@ -59,9 +67,7 @@ pub fn barycentric_error(v: [Vec3; 3], b: [f32; 3]) -> Vec3 {
 /// still report the surface it leaves; Embree has no conservative `t` bound to reject it.
 #[inline]
 pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
-    // (1e-30: a point exactly at the world origin still moves, by a normal float.)
-    let d = n.abs().dot(err).max(gamma(7) * p.abs().max_element()).max(1e-30);
-    let offset = d * n;
+    let offset = offset_distance(p, err, n) * n;
     let mut po = p + offset;
     for i in 0..3 {
         if offset[i] > 0.0 {

@@ -9,6 +9,7 @@ use super::camera::SurfaceHit;
 use super::{Counters, Shared};
 use crate::accel::Accel;
 use crate::geometry::Ray;
+use crate::light::LightSample;
 use crate::material::Material;
 use crate::sampling::power_heuristic;
 use glam::Vec3;
@@ -19,13 +20,21 @@ use rand_pcg::Pcg32;
 /// itself.
 pub const SHADOW_MARGIN: f32 = 1e-4;
 
-/// Whether the segment from the surface at `hit` toward `wi` over `dist` is unblocked.
+/// Whether the segment from the surface at `hit` toward the light sample `ls` is unblocked. It
+/// leaves from a robust origin and stops short of the sampled point by that point's rounding
+/// error (`ls.end_error`, as pbrt-v4's `SpawnRayTo` offsets both ends), then by
+/// [`SHADOW_MARGIN`]. A light point within rounding distance is visible: nothing between the
+/// two can be resolved.
 #[inline]
-pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, wi: Vec3, dist: f32, c: &mut Counters) -> bool {
+pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, ls: &LightSample, c: &mut Counters) -> bool {
     c.rays.shadow += 1;
-    let origin = hit.spawn(wi);
-    let t_max = if dist.is_finite() { dist * (1.0 - SHADOW_MARGIN) } else { f32::INFINITY };
-    !s.accel.occluded(&Ray::segment(origin, wi, 0.0, t_max))
+    let origin = hit.spawn(ls.wi);
+    let t_max = if ls.dist.is_finite() {
+        (ls.dist - ls.end_error).max(0.0) * (1.0 - SHADOW_MARGIN)
+    } else {
+        f32::INFINITY
+    };
+    !s.accel.occluded(&Ray::segment(origin, ls.wi, 0.0, t_max))
 }
 
 /// Direct radiance reflected toward `wo` at `hit`, averaged over `n` light samples (plus, for
@@ -48,7 +57,7 @@ pub fn direct_light<A: Accel>(
         // Light sampling.
         if let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) {
             let f = m.eval(hit.n, wo, ls.wi);
-            if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, ls.wi, ls.dist, c) {
+            if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, &ls, c) {
                 let cos = hit.n.dot(ls.wi).abs();
                 let w = if mis && !ls.delta {
                     power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi))

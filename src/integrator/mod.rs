@@ -478,6 +478,9 @@ pub fn render_scene_with(
     progress: &dyn Progress,
     control: Control<'_>,
 ) -> Result<RenderOutput, crate::accel::AccelError> {
+    // Far from the origin, render a copy centred on it (see `Scene::recentred`).
+    let moved = scene.recentred();
+    let scene = moved.as_ref().unwrap_or(scene);
     let mut stats = Stats::default();
     let options = crate::accel::AccelOptions { robust: cfg.robust, ..Default::default() };
     let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());

@@ -123,7 +123,7 @@ fn light_sample<A: Accel>(
 ) -> Vec3 {
     let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) else { return Vec3::ZERO };
     let f = m.eval(hit.n, wo, ls.wi);
-    if f == Vec3::ZERO || ls.li == Vec3::ZERO || !visible(s, hit, ls.wi, ls.dist, c) {
+    if f == Vec3::ZERO || ls.li == Vec3::ZERO || !visible(s, hit, &ls, c) {
         return Vec3::ZERO;
     }
     let w = if ls.delta { 1.0 } else { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) };

@@ -52,6 +52,7 @@ impl DistantLight {
         Some(LightSample {
             wi: -self.direction,
             dist: f32::INFINITY,
+            end_error: 0.0,
             li: self.irradiance,
             pdf: 1.0,
             delta: true,

@@ -44,6 +44,10 @@ pub struct LightSample {
     pub wi: Vec3,
     /// Distance to the sampled light point (for the shadow ray); infinite for distant lights.
     pub dist: f32,
+    /// How much shorter than `dist` a shadow ray must stop so that it cannot reach the emitter
+    /// itself: the sampled point's rounding-error bound, measured along `wi` (0 for point,
+    /// spot and distant lights, which are not on a surface).
+    pub end_error: f32,
     /// Incident radiance; for delta lights the incident "delta" term (`I / d^2` or `E`).
     pub li: Vec3,
     /// Solid-angle density; 1 for delta lights.

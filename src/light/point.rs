@@ -26,7 +26,14 @@ impl PointLight {
         if dist <= 0.0 || !dist.is_finite() {
             return None;
         }
-        Some(LightSample { wi: d / dist, dist, li: self.intensity / (dist * dist), pdf: 1.0, delta: true })
+        Some(LightSample {
+            wi: d / dist,
+            dist,
+            end_error: 0.0,
+            li: self.intensity / (dist * dist),
+            pdf: 1.0,
+            delta: true,
+        })
     }
 
     /// A photon leaving the light in a uniformly distributed direction (`u_dir`).

@@ -80,7 +80,14 @@ impl SpotLight {
         }
         let wi = d / dist;
         let li = self.intensity_toward(-wi) / (dist * dist);
-        (li.max_element() > 0.0).then_some(LightSample { wi, dist, li, pdf: 1.0, delta: true })
+        (li.max_element() > 0.0).then_some(LightSample {
+            wi,
+            dist,
+            end_error: 0.0,
+            li,
+            pdf: 1.0,
+            delta: true,
+        })
     }
 
     /// A photon direction with density proportional to the profile; `pdf_dir` is that density.

@@ -54,6 +54,9 @@ pub struct IrradianceCache {
     tree: KdTree<Site>,
     /// Largest distance at which a site is used.
     max_radius: f32,
+    /// Sites pack irradiance divided by this power of two (see [`pack::rgb9e5_scale`]),
+    /// so that any light power fits RGB9E5's range.
+    scale: f32,
 }
 
 /// A place where irradiance is precomputed: a photon's position, its error bound and the
@@ -90,24 +93,32 @@ impl IrradianceCache {
         // only: every site's value is the same in any order).
         let mut sites = sites;
         morton_sort(&mut sites);
-        let sites: Vec<Site> = sites
+        let values: Vec<(SitePoint, Irradiance)> = sites
             .into_par_iter()
             .enumerate()
             .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, site)| {
                 let (pos, n) = (site.pos, site.n);
-                let e_ind: Vec3 = indirect.iter().map(|m| m.irradiance(pos, n, gather, scratch)).sum();
-                let e_caus: Vec3 =
-                    caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
-                Site {
-                    pos: pos.to_array(),
-                    normal: pack::encode_dir_oct(n),
-                    direct: pack::rgb9e5_encode(direct(i, &site)),
-                    indirect: pack::rgb9e5_encode(e_ind),
-                    caustic: pack::rgb9e5_encode(e_caus),
-                }
+                let indirect = indirect.iter().map(|m| m.irradiance(pos, n, gather, scratch)).sum();
+                let caustic = caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
+                (site, Irradiance { direct: direct(i, &site), indirect, caustic })
             })
             .collect();
-        IrradianceCache { tree: KdTree::build(sites), max_radius: gather.max_radius }
+        let largest = values
+            .iter()
+            .map(|(_, e)| e.direct.max(e.indirect).max(e.caustic).max_element())
+            .fold(0.0, f32::max);
+        let scale = pack::rgb9e5_scale(largest);
+        let sites = values
+            .into_iter()
+            .map(|(site, e)| Site {
+                pos: site.pos.to_array(),
+                normal: pack::encode_dir_oct(site.n),
+                direct: pack::rgb9e5_encode(e.direct / scale),
+                indirect: pack::rgb9e5_encode(e.indirect / scale),
+                caustic: pack::rgb9e5_encode(e.caustic / scale),
+            })
+            .collect();
+        IrradianceCache { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
     }
 
     pub fn len(&self) -> usize {
@@ -136,9 +147,9 @@ impl IrradianceCache {
             }
         }
         best.map(|(_, s)| Irradiance {
-            direct: pack::rgb9e5_decode(s.direct),
-            indirect: pack::rgb9e5_decode(s.indirect),
-            caustic: pack::rgb9e5_decode(s.caustic),
+            direct: pack::rgb9e5_decode(s.direct) * self.scale,
+            indirect: pack::rgb9e5_decode(s.indirect) * self.scale,
+            caustic: pack::rgb9e5_decode(s.caustic) * self.scale,
         })
     }
 }

@@ -75,6 +75,10 @@ pub struct GatherParams {
 pub struct PhotonMap {
     tree: KdTree<Photon>,
     color: Option<MapColor>,
+    /// RGB maps pack `power / scale`, a power of two chosen from the largest power channel
+    /// ([`pack::rgb9e5_scale`]), so that any light power fits RGB9E5's range (2⁻²⁴ to 2¹⁶
+    /// unscaled).
+    scale: f32,
     /// Photon paths emitted to build this map (the estimate's denominator is already folded
     /// into each photon's power; kept for reports).
     pub emitted: u64,
@@ -85,17 +89,18 @@ impl PhotonMap {
     pub fn build(hits: Vec<PhotonHit>, color: MapColor, emitted: u64) -> Self {
         // A fresh exact-size buffer: collecting in place would keep the larger allocation of
         // `hits` alive for the life of the map.
+        let scale = pack::rgb9e5_scale(hits.iter().map(|h| h.power.max_element()).fold(0.0, f32::max));
         let mut photons = Vec::with_capacity(hits.len());
         photons.extend(hits.iter().map(|h| Photon {
             pos: h.pos.to_array(),
             dir: pack::encode_dir_oct(h.wi),
             power: match color {
-                MapColor::Rgb => pack::rgb9e5_encode(h.power),
+                MapColor::Rgb => pack::rgb9e5_encode(h.power / scale),
                 MapColor::Channel(c) => h.power[c].to_bits(),
             },
         }));
         drop(hits);
-        PhotonMap { tree: KdTree::build(photons), color: Some(color), emitted }
+        PhotonMap { tree: KdTree::build(photons), color: Some(color), emitted, scale }
     }
 
     pub fn len(&self) -> usize {
@@ -114,7 +119,7 @@ impl PhotonMap {
     #[inline]
     fn power(&self, p: &Photon) -> Vec3 {
         match self.color {
-            Some(MapColor::Rgb) => pack::rgb9e5_decode(p.power),
+            Some(MapColor::Rgb) => pack::rgb9e5_decode(p.power) * self.scale,
             Some(MapColor::Channel(c)) => {
                 let mut v = Vec3::ZERO;
                 v[c] = f32::from_bits(p.power);

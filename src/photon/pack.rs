@@ -107,6 +107,17 @@ pub fn rgb9e5_encode(rgb: Vec3) -> u32 {
     q(r) | (q(g) << 9) | (q(b) << 18) | ((exp as u32) << 27)
 }
 
+/// A power of two that divides `max` into about `(2^14, 2^15]`, the top of RGB9E5's range
+/// (1 for zero, negative or non-finite `max`): values of any magnitude up to `max`, divided by
+/// it, pack with [`rgb9e5_encode`] without saturating, keep 2^30 of dynamic range below `max`
+/// and round alike at every scale (the division is exact).
+pub fn rgb9e5_scale(max: f32) -> f32 {
+    if !(max > 0.0 && max.is_finite()) {
+        return 1.0;
+    }
+    exp2i((max.log2().ceil() as i32 - 15).clamp(-126, 127))
+}
+
 /// Unpacks [`rgb9e5_encode`]'s output.
 pub fn rgb9e5_decode(bits: u32) -> Vec3 {
     let exp = (bits >> 27) as i32;
@@ -184,5 +195,28 @@ mod tests {
         // Rounding up to the next power of two bumps the exponent.
         let d = rgb9e5_decode(rgb9e5_encode(Vec3::splat(0.9995)));
         assert_eq!(d, Vec3::ONE);
+    }
+
+    /// Any magnitude lands at the top of the range, and packing over the scale rounds exactly
+    /// as packing the unscaled value does wherever that one is in range.
+    #[test]
+    fn rgb9e5_scale_fits_any_magnitude_and_keeps_the_rounding() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        for max in [1e-30f32, 1e-12, 3e-5, 1.0, 65408.0, 1e12, 3e38] {
+            let s = rgb9e5_scale(max);
+            let top = max / s;
+            assert!(top > 16384.0 * (1.0 - 1e-6) && top <= 32768.0 * (1.0 + 1e-6), "{max}: {top}");
+            let v = Vec3::new(rng.gen::<f32>(), rng.gen::<f32>(), rng.gen::<f32>()) * max;
+            let d = rgb9e5_decode(rgb9e5_encode(v / s)) * s;
+            assert!((d - v).abs().max_element() <= v.max_element() / 512.0, "{max}: {v} -> {d}");
+        }
+        for _ in 0..1000 {
+            let v = Vec3::new(rng.gen::<f32>(), rng.gen::<f32>(), rng.gen::<f32>()) * 10.0;
+            let s = rgb9e5_scale(v.max_element());
+            assert_eq!(rgb9e5_decode(rgb9e5_encode(v / s)) * s, rgb9e5_decode(rgb9e5_encode(v)), "{v}");
+        }
+        for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert_eq!(rgb9e5_scale(bad), 1.0);
+        }
     }
 }
