@@ -5,8 +5,9 @@
 //!   the mirror and glass spheres) and without (`--caustic-aim false`: photons emitted from the
 //!   light as usual, light → specular⁺ → diffuse paths kept), at the default budget and, without
 //!   aiming, at as many emission tries as aiming made (so as many photons reach the spheres).
-//!   Time of the caustic stage (tracing and balancing the map) and RMSE of the caustic image
-//!   against a caustic render with ten times the aimed photons made here (another seed).
+//!   Time of the caustic stage (tracing and balancing the map), per stored photon, and RMSE of
+//!   the caustic image against a caustic render made here with ten times the aimed photons and
+//!   200 photons per estimate (another seed).
 //! * **cornell** (no mirror or glass), the whole image at the default settings, 128×128: time
 //!   with the caustic stage as the analysis decides (`--caustic-pass auto`: skipped) and forced
 //!   on (`--caustic-pass on`).
@@ -27,6 +28,8 @@ use std::path::Path;
 use std::time::Duration;
 
 const SIZE: u32 = 128;
+/// Photons per caustic estimate of the reference.
+const REFERENCE_K: u32 = 200;
 
 fn scene(name: &str) -> Scene {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -54,45 +57,61 @@ struct Row {
     error: Option<(f64, f64)>,
 }
 
+/// Renders each of `configs` `runs` times, interleaved (run 1 of every config, then run 2, ...)
+/// so that a change in the machine's load hits every row alike; one row per config, with the
+/// first run's image.
 fn measure(
-    what: String,
-    s: &Scene,
-    settings: &RenderSettings,
+    configs: &[(String, &Scene, RenderSettings)],
     runs: usize,
     reference: Option<&Film>,
-) -> (Row, Film) {
-    let outs: Vec<RenderOutput> = (0..runs).map(|_| render(s, settings, SIZE)).collect();
-    let first = &outs[0];
-    let caustic = first.stats.photons.get("caustic");
-    let error = reference.map(|r| {
-        let (rmse, _) = compare(&first.film, r).unwrap();
-        (rmse, first.film.mean() / r.mean() - 1.0)
-    });
-    let row = Row {
-        what,
-        caustic_s: median(outs.iter().map(caustic_seconds).collect()),
-        total_s: median(outs.iter().map(|o| o.stats.wall_seconds + o.stats.seconds("accel")).collect()),
-        emitted: caustic.map_or(0, |m| m.emitted),
-        stored: caustic.map_or(0, |m| m.stored),
-        error,
-    };
-    (row, outs.into_iter().next().unwrap().film)
+) -> Vec<(Row, Film)> {
+    let mut outs: Vec<Vec<RenderOutput>> = configs.iter().map(|_| Vec::new()).collect();
+    for _ in 0..runs {
+        for ((_, s, settings), o) in configs.iter().zip(&mut outs) {
+            o.push(render(s, settings, SIZE));
+        }
+    }
+    configs
+        .iter()
+        .zip(outs)
+        .map(|((what, _, _), outs)| {
+            let first = &outs[0];
+            let caustic = first.stats.photons.get("caustic");
+            let error = reference.map(|r| {
+                let (rmse, _) = compare(&first.film, r).unwrap();
+                (rmse, first.film.mean() / r.mean() - 1.0)
+            });
+            let row = Row {
+                what: what.clone(),
+                caustic_s: median(outs.iter().map(caustic_seconds).collect()),
+                total_s: median(
+                    outs.iter().map(|o| o.stats.wall_seconds + o.stats.seconds("accel")).collect(),
+                ),
+                emitted: caustic.map_or(0, |m| m.emitted),
+                stored: caustic.map_or(0, |m| m.stored),
+                error,
+            };
+            (row, outs.into_iter().next().unwrap().film)
+        })
+        .collect()
 }
 
 fn print_rows(title: &str, rows: &[Row]) {
     println!("\n{title}");
     println!(
-        "{:<44} {:>10} {:>9} {:>11} {:>9} {:>9} {:>8}",
-        "", "caustic s", "total s", "emitted", "stored", "RMSE", "mean"
+        "{:<44} {:>10} {:>9} {:>11} {:>9} {:>10} {:>9} {:>8}",
+        "", "caustic s", "total s", "emitted", "stored", "us/stored", "RMSE", "mean"
     );
     for r in rows {
         let (rmse, bias) = match r.error {
             Some((e, b)) => (format!("{e:.5}"), format!("{:+.2}%", 100.0 * b)),
             None => ("-".into(), "-".into()),
         };
+        let per =
+            if r.stored > 0 { format!("{:.2}", 1e6 * r.caustic_s / r.stored as f64) } else { "-".into() };
         println!(
-            "{:<44} {:>10.3} {:>9.3} {:>11} {:>9} {:>9} {:>8}",
-            r.what, r.caustic_s, r.total_s, r.emitted, r.stored, rmse, bias
+            "{:<44} {:>10.3} {:>9.3} {:>11} {:>9} {:>10} {:>9} {:>8}",
+            r.what, r.caustic_s, r.total_s, r.emitted, r.stored, per, rmse, bias
         );
     }
 }
@@ -142,57 +161,48 @@ fn main() {
 
     let defaults = RenderSettings::default().resolve(1, 1).unwrap();
     let budget = defaults.caustic_photons;
-    let reference =
-        render(&caustics, &RenderSettings { seed: Some(1001), ..caustic_settings(true, 10 * budget) }, SIZE);
-    let (aimed, _) = measure(
-        format!("aim on  (--caustic-aim true), {budget} aimed"),
+    // Ten times the photons and a wider gather (k = 200, so a radius ~0.55 of the default's
+    // and half its noise): a reference better than every row on both counts.
+    let reference = render(
         &caustics,
-        &caustic_settings(true, budget),
-        runs,
-        Some(&reference.film),
+        &RenderSettings {
+            seed: Some(1001),
+            caustic_gather_photons: Some(REFERENCE_K),
+            ..caustic_settings(true, 10 * budget)
+        },
+        SIZE,
     );
-    let tries = aimed.emitted;
-    let (plain, _) = measure(
-        format!("aim off (--caustic-aim false), {budget}"),
-        &caustics,
-        &caustic_settings(false, budget),
-        runs,
-        Some(&reference.film),
-    );
-    let (plain_more, _) = measure(
-        format!("aim off (--caustic-aim false), {tries}"),
-        &caustics,
-        &caustic_settings(false, tries),
-        runs,
-        Some(&reference.film),
-    );
+    // The number of emission tries aiming makes for the default budget.
+    let tries = render(&caustics, &caustic_settings(true, budget), SIZE).stats.photons["caustic"].emitted;
+    let configs = [
+        (format!("aim on  (--caustic-aim true), {budget} aimed"), &caustics, caustic_settings(true, budget)),
+        (format!("aim off (--caustic-aim false), {budget}"), &caustics, caustic_settings(false, budget)),
+        (format!("aim off (--caustic-aim false), {tries}"), &caustics, caustic_settings(false, tries)),
+    ];
+    let rows = measure(&configs, runs, Some(&reference.film));
     let threads = rayon::current_num_threads();
     print_rows(
         &format!(
             "caustics, --component caustic, {SIZE}x{SIZE}, 16 spp, {threads} threads; median of {runs} runs; \
-             RMSE against {} aimed photons (seed 1001)",
+             RMSE against {} aimed photons, k = {REFERENCE_K} (seed 1001)",
             10 * budget
         ),
-        &[aimed, plain, plain_more],
+        &rows.into_iter().map(|(r, _)| r).collect::<Vec<_>>(),
     );
 
-    let (auto, auto_film) = measure(
-        "caustic pass auto (skipped: no mirror or glass)".into(),
-        &cornell,
-        &RenderSettings::default(),
-        runs,
-        None,
-    );
-    let (on, on_film) = measure(
-        "caustic pass on  (--caustic-pass on)".into(),
-        &cornell,
-        &RenderSettings { caustic_pass: Some(CausticPass::On), ..Default::default() },
-        runs,
-        None,
-    );
+    let configs = [
+        ("caustic pass auto (skipped: no mirror or glass)".to_string(), &cornell, RenderSettings::default()),
+        (
+            "caustic pass on  (--caustic-pass on)".to_string(),
+            &cornell,
+            RenderSettings { caustic_pass: Some(CausticPass::On), ..Default::default() },
+        ),
+    ];
+    let rows = measure(&configs, runs, None);
     print_rows(
         &format!("cornell, defaults, {SIZE}x{SIZE}, {threads} threads; median of {runs} runs"),
-        &[auto, on],
+        &rows.iter().map(|(r, _)| Row { what: r.what.clone(), error: None, ..*r }).collect::<Vec<_>>(),
     );
+    let (auto_film, on_film) = (&rows[0].1, &rows[1].1);
     println!("cornell images identical: {}", if auto_film.pixels == on_film.pixels { "yes" } else { "no" });
 }

@@ -532,7 +532,7 @@ pub fn render_scene_measured(
 ) -> Result<RenderOutput, crate::accel::AccelError> {
     let mut stats = Stats::default();
     let options = crate::accel::AccelOptions { robust: cfg.robust, ..Default::default() };
-    let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
+    let reason = format!("{:?} over {} triangles (the only ray caster built)", cfg.accel, scene.mesh.len());
     let accel =
         stats.run("accel", reason, |_| crate::accel::AnyAccel::build(cfg.accel, &scene.mesh, options))?;
     stats.accel = accel.name().to_string();
