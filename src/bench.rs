@@ -141,8 +141,6 @@ pub struct BenchRow {
     pub rays_to_raw_ratio: f64,
     /// Bytes of the photon maps (kd-tree included) per stored photon.
     pub bytes_per_photon: f64,
-    /// Peak resident memory of the process after these runs (it only grows).
-    pub peak_memory_bytes: u64,
     /// The first row's median seconds over this row's.
     pub speedup: f64,
 }
@@ -159,7 +157,20 @@ pub struct BenchReport {
     pub photons: u64,
     pub caustic_photons: u64,
     pub spp: u32,
+    /// Peak resident memory of the process over all runs (Linux `VmHWM`; 0 where unknown).
+    pub peak_memory_bytes: u64,
+    /// The machine's one-minute load average before and after the runs (Linux; 0 where
+    /// unknown): above the thread count, other work was competing for the cores.
+    pub load_average: [f64; 2],
     pub rows: Vec<BenchRow>,
+}
+
+/// The one-minute load average from `/proc/loadavg`, 0 where unavailable.
+fn load_average() -> f64 {
+    std::fs::read_to_string("/proc/loadavg")
+        .ok()
+        .and_then(|s| s.split_whitespace().next().and_then(|v| v.parse().ok()))
+        .unwrap_or(0.0)
 }
 
 /// Why a benchmark could not run.
@@ -200,8 +211,8 @@ fn bytes_per_photon(stats: &Stats) -> f64 {
     }
 }
 
-/// Renders `scene` with `cfg` `spec.runs` times on each thread count of `spec.threads`, each
-/// render followed by the raw-rate measurement on the same threads. `on_run(threads, run,
+/// Renders `scene` with `cfg` `spec.runs` times on each thread count of `spec.threads`
+/// (interleaved), each render followed by the raw-rate measurement on the same threads. `on_run(threads, run,
 /// seconds)` is called after each render.
 pub fn run(
     scene: &Scene,
@@ -215,29 +226,36 @@ pub fn run(
             "at least one run and one thread count, each in 1..=4096, are needed".into(),
         ));
     }
-    let mut rows: Vec<BenchRow> = Vec::new();
-    let mut accel = String::new();
-    for &threads in &spec.threads {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .start_handler(|_| crate::accel::init_tracing_thread())
-            .build()
-            .map_err(|source| BenchError::Pool { threads, source })?;
-        let mut runs: Vec<Stats> = Vec::new();
-        let mut seconds = Vec::new();
-        for run in 0..spec.runs {
+    let pools = spec
+        .threads
+        .iter()
+        .map(|&threads| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .start_handler(|_| crate::accel::init_tracing_thread())
+                .build()
+                .map_err(|source| BenchError::Pool { threads, source })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    let load_before = load_average();
+    // Interleaved (run 1 on every thread count, then run 2, ...), so that a change in the
+    // machine's load hits every thread count alike.
+    let mut runs: Vec<Vec<(f64, Stats)>> = spec.threads.iter().map(|_| Vec::new()).collect();
+    for run in 0..spec.runs {
+        for ((pool, &threads), done) in pools.iter().zip(&spec.threads).zip(&mut runs) {
             let out = pool.install(|| {
                 render_scene_measured(scene, cfg, &Quiet, Control::default(), Some(spec.raw_rays_per_kind))
             })?;
             let s = out.stats.wall_seconds + out.stats.seconds("accel");
             on_run(threads, run, s);
-            seconds.push(s);
-            runs.push(out.stats);
+            done.push((s, out.stats));
         }
-        accel = runs[0].accel.clone();
-        let m = |f: &dyn Fn(&Stats) -> f64| median(runs.iter().map(f).collect());
+    }
+    let mut rows: Vec<BenchRow> = Vec::new();
+    for (&threads, runs) in spec.threads.iter().zip(&runs) {
+        let m = |f: &dyn Fn(&Stats) -> f64| median(runs.iter().map(|(_, s)| f(s)).collect());
         let raw = |f: &dyn Fn(&RawRays) -> f64| m(&|s| s.raw_rays.as_ref().map_or(0.0, f));
-        let med = median(seconds);
+        let med = median(runs.iter().map(|(s, _)| *s).collect());
         let speedup = rows.first().map_or(1.0, |first| if med > 0.0 { first.seconds / med } else { 0.0 });
         rows.push(BenchRow {
             threads,
@@ -252,10 +270,10 @@ pub fn run(
             raw_shadow_rays_per_second: raw(&|r| r.shadow),
             rays_to_raw_ratio: m(&|s| s.rays_to_raw_ratio),
             bytes_per_photon: m(&bytes_per_photon),
-            peak_memory_bytes: crate::stats::peak_memory_bytes().unwrap_or(0),
             speedup,
         });
     }
+    let accel = runs[0][0].1.accel.clone();
     Ok(BenchReport {
         scene: name.to_string(),
         accel,
@@ -266,6 +284,8 @@ pub fn run(
         photons: cfg.photons,
         caustic_photons: cfg.caustic_photons,
         spp: cfg.spp,
+        peak_memory_bytes: crate::stats::peak_memory_bytes().unwrap_or(0),
+        load_average: [load_before, load_average()],
         rows,
     })
 }
@@ -275,7 +295,7 @@ impl fmt::Display for BenchReport {
         let runs = self.rows.first().map_or(0, |r| r.runs);
         writeln!(
             f,
-            "{}: {} triangles, {}x{}, {} integrator, {} photons, {} caustic photons, {} spp, {}; median of {runs} runs",
+            "{}: {} triangles, {}x{}, {} integrator, {} photons, {} caustic photons, {} spp, {}; medians of {runs} runs",
             self.scene,
             self.triangles,
             self.width,
@@ -313,8 +333,14 @@ impl fmt::Display for BenchReport {
         line(f, "  raw shadow rays, M/s", &|r| mega(r.raw_shadow_rays_per_second))?;
         line(f, "render / raw", &|r| format!("{:.3}", r.rays_to_raw_ratio))?;
         line(f, "bytes per stored photon", &|r| format!("{:.2}", r.bytes_per_photon))?;
-        line(f, "peak memory, MB", &|r| format!("{:.1}", r.peak_memory_bytes as f64 / 1e6))?;
-        line(f, "speed-up", &|r| format!("{:.2}", r.speedup))
+        line(f, "speed-up", &|r| format!("{:.2}", r.speedup))?;
+        writeln!(
+            f,
+            "peak memory {:.1} MB; load average {:.2} before, {:.2} after",
+            self.peak_memory_bytes as f64 / 1e6,
+            self.load_average[0],
+            self.load_average[1]
+        )
     }
 }
 
