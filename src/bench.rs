@@ -31,6 +31,9 @@ use std::time::Instant;
 /// Rays per kind of the calibration `photonmap render --stats` runs (a few tens of ms).
 pub const STATS_CALIBRATION_RAYS: usize = 1 << 15;
 
+/// Most raw rays per kind `photonmap bench` accepts (the rays take a few hundred MB).
+pub const MAX_RAW_RAYS: usize = 2_000_000;
+
 /// Incoherent and shadow rays per rayon task.
 const CHUNK: usize = 1024;
 
@@ -225,6 +228,12 @@ pub fn run(
         return Err(BenchError::Invalid(
             "at least one run and one thread count, each in 1..=4096, are needed".into(),
         ));
+    }
+    if spec.runs > 1000 || spec.raw_rays_per_kind > MAX_RAW_RAYS {
+        return Err(BenchError::Invalid(format!(
+            "at most 1000 runs and {MAX_RAW_RAYS} raw rays per kind (asked: {} and {})",
+            spec.runs, spec.raw_rays_per_kind
+        )));
     }
     let pools = spec
         .threads
