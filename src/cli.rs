@@ -2,7 +2,9 @@
 
 use clap::{Args, Parser, Subcommand};
 use photonmap::accel::AccelKind;
-use photonmap::config::{ColorMode, Component, IndirectMode, Integrator, Kernel, RenderSettings};
+use photonmap::config::{
+    CausticPass, ColorMode, Component, IndirectMode, Integrator, Kernel, RenderSettings,
+};
 use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
@@ -46,6 +48,10 @@ pub enum Command {
     /// surfaces, closed boxes, extreme powers, a million photons on a point, a million slivers)
     /// and print a table; exits non-zero if any check fails.
     Stress(StressArgs),
+    /// Speed: render a scene several times on one thread and on all threads, and report medians
+    /// of photons, gather queries and rays per second against the raw ray rate of the same
+    /// accelerator measured in the same run.
+    Bench(Box<BenchArgs>),
     /// Print what a scene holds: triangles, materials, lights, bounds.
     Info {
         /// Scene file (TOML).
@@ -163,6 +169,15 @@ pub struct SettingsArgs {
     /// shrinks, in (0, 1) [default: 0.7].
     #[arg(long)]
     pub alpha: Option<f32>,
+    /// Aim caustic photons at the mirrors and glass (bounding-sphere projection map); false:
+    /// emit them from the lights as usual and keep the light-specular-diffuse paths
+    /// [default: true].
+    #[arg(long)]
+    pub caustic_aim: Option<bool>,
+    /// Run the caustic photon pass when the scene analysis says it is needed (auto), always
+    /// (on) or never (off) [default: auto].
+    #[arg(long, value_enum)]
+    pub caustic_pass: Option<CausticPass>,
 }
 
 impl SettingsArgs {
@@ -191,6 +206,8 @@ impl SettingsArgs {
             passes: self.passes,
             time: self.time,
             alpha: self.alpha,
+            caustic_aim: self.caustic_aim,
+            caustic_pass: self.caustic_pass,
         }
     }
 }
@@ -273,4 +290,30 @@ pub struct StressArgs {
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Scene file (TOML).
+    pub scene: PathBuf,
+    /// Image width.
+    #[arg(long, default_value_t = 128)]
+    pub width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 128)]
+    pub height: u32,
+    /// Renders per thread count; the table shows medians.
+    #[arg(long, default_value_t = 3)]
+    pub runs: usize,
+    /// Thread counts to compare [default: 1 and all cores].
+    #[arg(long, value_delimiter = ',')]
+    pub threads: Vec<usize>,
+    /// Rays per kind (camera, incoherent, shadow) of the raw-rate measurement after each render.
+    #[arg(long, default_value_t = 200_000)]
+    pub raw_rays: usize,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub settings: SettingsArgs,
 }

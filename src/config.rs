@@ -73,6 +73,20 @@ pub enum Integrator {
     Sppm,
 }
 
+/// Whether the caustic photon pass runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum CausticPass {
+    /// When the scene analysis says caustics are possible (mirrors or glass, something diffuse
+    /// to receive them, a light with power) and the render shows them.
+    #[default]
+    Auto,
+    /// Always, even when the analysis would skip it (to measure what skipping saves).
+    On,
+    /// Never: the image has no caustics from the caustic map.
+    Off,
+}
+
 /// Optional settings as written in `[render]` (or given on the command line). `None` means
 /// "use the default".
 #[derive(Clone, Debug, Default, Deserialize, Serialize, PartialEq)]
@@ -101,6 +115,8 @@ pub struct RenderSettings {
     pub passes: Option<u32>,
     pub time: Option<f64>,
     pub alpha: Option<f32>,
+    pub caustic_aim: Option<bool>,
+    pub caustic_pass: Option<CausticPass>,
 }
 
 impl RenderSettings {
@@ -132,7 +148,9 @@ impl RenderSettings {
             integrator,
             passes,
             time,
-            alpha
+            alpha,
+            caustic_aim,
+            caustic_pass
         )
     }
 }
@@ -179,6 +197,12 @@ pub struct RenderConfig {
     /// Progressive photon mapping: the fraction of new photons kept at each radius update
     /// (Hachisuka & Jensen's alpha, in (0, 1)).
     pub alpha: f32,
+    /// Aim caustic photons at the bounding spheres of the specular objects (a projection map);
+    /// `false`: emit them from the lights as usual and keep only light → specular+ → diffuse
+    /// paths.
+    pub caustic_aim: bool,
+    /// Whether the caustic pass runs: as the scene analysis decides, always, or never.
+    pub caustic_pass: CausticPass,
 }
 
 /// Progressive photon mapping's defaults: photons per pass (indirect and caustic), camera
@@ -245,6 +269,8 @@ impl RenderSettings {
             passes: self.passes.or(if sppm && self.time.is_none() { Some(SPPM_PASSES) } else { None }),
             time: self.time,
             alpha: self.alpha.unwrap_or(0.7),
+            caustic_aim: self.caustic_aim.unwrap_or(true),
+            caustic_pass: self.caustic_pass.unwrap_or_default(),
         };
         c.validate()?;
         Ok(c)

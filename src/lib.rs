@@ -12,6 +12,7 @@
 
 pub mod accel;
 pub mod agree;
+pub mod bench;
 pub mod config;
 pub mod converge;
 pub mod film;

@@ -27,6 +27,7 @@ fn main() -> ExitCode {
         Command::Info { scene } => info(&scene),
         Command::Stress(args) => stress(args),
         Command::Converge(args) => converge(args),
+        Command::Bench(args) => bench(*args),
         Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
             compare(&image, &reference, downsample, json, diff.as_deref(), diff_scale)
         }
@@ -113,7 +114,10 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         checkpoint: args.checkpoint_every.map(|k| (k, &checkpoint as integrator::progressive::Checkpoint)),
         started: wall,
     };
-    let mut output = pool.install(|| integrator::render_scene_with(&scene, &cfg, &progress, control))?;
+    // With --stats, a short measurement of the accelerator alone follows the render.
+    let calibrate = args.stats.as_ref().map(|_| photonmap::bench::STATS_CALIBRATION_RAYS);
+    let mut output =
+        pool.install(|| integrator::render_scene_measured(&scene, &cfg, &progress, control, calibrate))?;
     output.stats.stages.splice(0..0, load);
     output.stats.scene = args.scene.display().to_string();
     let mut stats = output.stats;
@@ -305,6 +309,34 @@ fn stress(args: cli::StressArgs) -> Result<()> {
     }
     if failed > 0 {
         bail!("{failed} of {} stress checks failed", rows.len());
+    }
+    Ok(())
+}
+
+fn bench(args: cli::BenchArgs) -> Result<()> {
+    use photonmap::bench::{self, BenchSpec};
+    let scene = Scene::load(&args.scene)?;
+    let settings = scene.render.overridden_by(&args.settings.to_settings());
+    let cfg = settings
+        .resolve(args.width, args.height)
+        .with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
+    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = if !args.threads.is_empty() {
+        args.threads.clone()
+    } else if all > 1 {
+        vec![1, all]
+    } else {
+        vec![1]
+    };
+    let spec = BenchSpec { runs: args.runs, threads, raw_rays_per_kind: args.raw_rays };
+    let name = args.scene.display().to_string();
+    let report = bench::run(&scene, &name, &cfg, &spec, |t, run, s| {
+        eprintln!("photonmap bench: {t} threads, run {}: {s:.3} s", run + 1)
+    })?;
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print!("{report}");
     }
     Ok(())
 }

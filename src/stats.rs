@@ -74,6 +74,48 @@ pub struct Stats {
     pub wall_seconds: f64,
     /// Peak resident memory of the process (Linux `VmHWM`), 0 where unknown.
     pub peak_memory_bytes: u64,
+    /// The accelerator alone on rays like the render's, same threads, measured after the
+    /// render (only when asked for: `--stats`, `photonmap bench`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub raw_rays: Option<RawRays>,
+    /// The raw rates weighted by the render's mix of rays (rays/s), 0 when not measured.
+    pub raw_rays_per_second: f64,
+    /// `rays_per_second / raw_rays_per_second`: the share of the photon and camera stages'
+    /// time that is ray casting (1 would mean nothing else costs anything); 0 when not measured.
+    pub rays_to_raw_ratio: f64,
+}
+
+/// Ray rates of the accelerator alone, by kind of ray (rays/s), from [`crate::bench::raw_rays`].
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct RawRays {
+    /// The scene's camera rays, one batch per pixel as the camera pass traces them.
+    pub camera: f64,
+    /// Closest hits of rays leaving surface points over the hemisphere (photon, gather and
+    /// specular rays are of this kind).
+    pub incoherent: f64,
+    /// Occlusion of segments between surface points.
+    pub shadow: f64,
+    /// Rays of each kind cast.
+    pub rays_per_kind: u64,
+    /// Time of the whole measurement, ray generation included.
+    pub seconds: f64,
+}
+
+impl RawRays {
+    /// The rate of the accelerator alone on the mix of `rays`: camera rays at the camera rate,
+    /// shadow rays at the shadow rate, the rest at the incoherent rate (0 without rays).
+    pub fn mixed_rate(&self, rays: &RayCounts) -> f64 {
+        let incoherent = rays.total() - rays.camera - rays.shadow;
+        let time = |n: u64, rate: f64| if n == 0 { 0.0 } else { n as f64 / rate };
+        let t = time(rays.camera, self.camera)
+            + time(rays.shadow, self.shadow)
+            + time(incoherent, self.incoherent);
+        if t > 0.0 && t.is_finite() {
+            rays.total() as f64 / t
+        } else {
+            0.0
+        }
+    }
 }
 
 /// The process's peak resident set size from `/proc/self/status` (Linux), if available.
@@ -110,6 +152,17 @@ impl Stats {
             }
         }
         self.stages = merged;
+    }
+
+    /// Records the raw ray rates and the render's ratio to them.
+    pub fn set_raw_rays(&mut self, raw: RawRays) {
+        self.raw_rays = Some(raw);
+        self.raw_rays_per_second = raw.mixed_rate(&self.rays);
+        self.rays_to_raw_ratio = if self.raw_rays_per_second > 0.0 {
+            self.rays_per_second / self.raw_rays_per_second
+        } else {
+            0.0
+        };
     }
 
     /// Seconds spent in the stage `name` (0 if it did not run).

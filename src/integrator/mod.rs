@@ -10,7 +10,7 @@ pub mod progressive;
 pub mod sppm;
 
 use crate::accel::Accel;
-use crate::config::{ColorMode, Integrator, RenderConfig};
+use crate::config::{CausticPass, ColorMode, Component, IndirectMode, Integrator, RenderConfig};
 use crate::film::Film;
 use crate::photon::irradiance::{self, IrradianceCache};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
@@ -145,6 +145,12 @@ pub fn render<A: Accel>(
     let start = std::time::Instant::now();
     let lights = stats.run("lights", "prepare emitters and light sampling", |_| LightSet::new(scene));
     let analysis = Analysis::of(scene, &lights);
+    let dark = lights.lights().iter().filter(|l| !(l.power().max_element() > 0.0)).count();
+    if dark > 0 {
+        let why =
+            format!("{dark} of {} lights have no power: no photons, no shadow rays", lights.lights().len());
+        stats.skip("emission.zero_power", why);
+    }
     let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
     let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
         k: k as usize,
@@ -317,6 +323,8 @@ impl<'a, A: Accel> Ctx<'a, A> {
             Some("nothing diffuse or glossy: no surface stores photons")
         } else if cfg.photons == 0 {
             Some("photon budget is 0")
+        } else if !cfg.component.shows(Component::Indirect) {
+            Some("the render does not show indirect light (--component)")
         } else {
             None
         };
@@ -332,6 +340,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
                 color: cfg.color,
                 max_bounces: cfg.max_bounces,
                 targets: &[],
+                aim: false,
                 seed: cfg.seed,
             };
             trace::trace_pass(self.scene, self.accel, &self.lights, &spec, self.progress)
@@ -347,43 +356,76 @@ impl<'a, A: Accel> Ctx<'a, A> {
         };
         let maps = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, cfg.color));
         record_maps(stats, "indirect", &maps);
-        (maps, sites)
+        (drop_empty(stats, "indirect", maps), sites)
     }
 
-    /// The caustic map, from photons aimed at the specular objects.
-    fn caustic_pass(&self, stats: &mut Stats) -> Vec<PhotonMap> {
+    /// Why the caustic pass does not run, if it does not: the scene analysis, overridden by
+    /// `--caustic-pass on|off`.
+    fn caustic_skip_reason(&self) -> Option<&'static str> {
         let cfg = &self.cfg;
-        let why_not = if cfg.integrator == Integrator::Path {
+        // Camera hits read the caustic map for the caustic term, final-gather hits for the
+        // indirect one.
+        let shown = match cfg.component {
+            Component::All | Component::Caustic => true,
+            Component::Indirect => cfg.indirect == IndirectMode::FinalGather,
+            Component::Emitted | Component::Direct => false,
+        };
+        if cfg.integrator == Integrator::Path {
             Some(PATH_TRACER)
+        } else if cfg.caustic_photons == 0 {
+            Some("caustic photon budget is 0")
+        } else if cfg.caustic_pass == CausticPass::On {
+            None
+        } else if cfg.caustic_pass == CausticPass::Off {
+            Some("off (--caustic-pass off)")
         } else if !self.analysis.has_specular {
             Some("no specular (mirror or glass) material")
         } else if !self.analysis.has_diffuse {
             Some("nothing diffuse or glossy to receive caustics")
         } else if !self.lit() {
             Some("no light has power")
-        } else if cfg.caustic_photons == 0 {
-            Some("caustic photon budget is 0")
+        } else if !shown {
+            Some("the render does not show caustics (--component)")
         } else {
             None
-        };
-        if let Some(why) = why_not {
+        }
+    }
+
+    /// The caustic map: photons aimed at the specular objects (or, with `--caustic-aim false`
+    /// or nothing to aim at, emitted as usual) that reach a diffuse surface through mirrors and
+    /// glass only.
+    fn caustic_pass(&self, stats: &mut Stats) -> Vec<PhotonMap> {
+        let cfg = &self.cfg;
+        if let Some(why) = self.caustic_skip_reason() {
             stats.skip("photons.caustic", why);
             return Vec::new();
         }
-        let targets = trace::specular_targets(self.scene);
-        let acceptance = trace::target_acceptance(&self.lights, &targets, 1 << 16, cfg.seed);
-        if acceptance <= 0.0 {
+        let forced = if cfg.caustic_pass == CausticPass::On { " (--caustic-pass on)" } else { "" };
+        let targets = if cfg.caustic_aim { trace::specular_targets(self.scene) } else { Vec::new() };
+        let acceptance = if targets.is_empty() {
+            0.0
+        } else {
+            trace::target_acceptance(&self.lights, &targets, 1 << 16, cfg.seed)
+        };
+        let aim = acceptance > 0.0;
+        let (tries, reason) = if aim {
+            // Tries such that about `caustic_photons` photons are aimed at the targets.
+            let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64)
+                .min(cfg.caustic_photons.saturating_mul(1000));
+            let reason = format!(
+                "{} specular targets, {:.2}% of emission aimed at them{forced}",
+                targets.len(),
+                100.0 * acceptance
+            );
+            (tries, reason)
+        } else if cfg.caustic_aim && cfg.caustic_pass != CausticPass::On {
             stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
             return Vec::new();
-        }
-        // Tries such that about `caustic_photons` photons are aimed at the targets.
-        let tries = ((cfg.caustic_photons as f64 / acceptance).ceil() as u64)
-            .min(cfg.caustic_photons.saturating_mul(1000));
-        let reason = format!(
-            "{} specular targets, {:.2}% of emission aimed at them",
-            targets.len(),
-            100.0 * acceptance
-        );
+        } else {
+            let why = if cfg.caustic_aim { "nothing to aim at" } else { "aiming off (--caustic-aim false)" };
+            let reason = format!("{why}: photons emitted from the lights, specular paths kept{forced}");
+            (cfg.caustic_photons, reason)
+        };
         self.progress.start("caustic photons", tries);
         let out = stats.run("photons.caustic", reason, |_| {
             let spec = trace::PassSpec {
@@ -392,6 +434,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
                 color: cfg.color,
                 max_bounces: cfg.max_bounces,
                 targets: &targets,
+                aim,
                 seed: cfg.seed ^ 0x5EED,
             };
             trace::trace_pass(self.scene, self.accel, &self.lights, &spec, self.progress)
@@ -400,7 +443,7 @@ impl<'a, A: Accel> Ctx<'a, A> {
         stats.rays.photon += out.rays;
         let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, cfg.color));
         record_maps(stats, "caustic", &maps);
-        maps
+        drop_empty(stats, "caustic", maps)
     }
 
     /// Precomputed irradiance at `sites` (empty when there are none).
@@ -427,16 +470,12 @@ impl<'a, A: Accel> Ctx<'a, A> {
         let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
         let cache = stats.run("irradiance", reason, |_| {
             let (gather, caustic_gather) = (&self.gather, &self.caustic_gather);
-            if cfg.indirect != crate::config::IndirectMode::FinalGather {
+            if cfg.indirect != IndirectMode::FinalGather {
                 // Only final gathering reads the direct part.
-                return IrradianceCache::build(
-                    sites,
-                    &maps.indirect,
-                    &maps.caustic,
-                    gather,
-                    caustic_gather,
-                    |_, _| Vec3::ZERO,
-                );
+                // Nor the caustic part: camera hits read the caustic map itself.
+                return IrradianceCache::build(sites, &maps.indirect, &[], gather, caustic_gather, |_, _| {
+                    Vec3::ZERO
+                });
             }
             // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
             // light and cosine sampling), times pi.
@@ -478,17 +517,36 @@ pub fn render_scene_with(
     progress: &dyn Progress,
     control: Control<'_>,
 ) -> Result<RenderOutput, crate::accel::AccelError> {
+    render_scene_measured(scene, cfg, progress, control, None)
+}
+
+/// [`render_scene_with`], then, when `calibrate` gives a number of rays per kind, the raw rate
+/// of the same accelerator on rays like the render's, on the same threads
+/// ([`crate::bench::raw_rays`], recorded by [`Stats::set_raw_rays`]).
+pub fn render_scene_measured(
+    scene: &Scene,
+    cfg: &RenderConfig,
+    progress: &dyn Progress,
+    control: Control<'_>,
+    calibrate: Option<usize>,
+) -> Result<RenderOutput, crate::accel::AccelError> {
     // Far from the origin, render a copy centred on it (see `Scene::recentred`).
     let moved = scene.recentred();
     let scene = moved.as_ref().unwrap_or(scene);
     let mut stats = Stats::default();
     let options = crate::accel::AccelOptions { robust: cfg.robust, ..Default::default() };
-    let reason = format!("{:?} over {} triangles", cfg.accel, scene.mesh.len());
+    let reason = format!("{:?} over {} triangles (the only ray caster built)", cfg.accel, scene.mesh.len());
     let accel =
         stats.run("accel", reason, |_| crate::accel::AnyAccel::build(cfg.accel, &scene.mesh, options))?;
     stats.accel = accel.name().to_string();
     stats.threads = rayon::current_num_threads();
-    Ok(crate::dispatch!(&accel, a => render(scene, a, cfg, progress, control, stats)))
+    Ok(crate::dispatch!(&accel, a => {
+        let mut out = render(scene, a, cfg, progress, control, stats);
+        if let Some(n) = calibrate {
+            out.stats.set_raw_rays(crate::bench::raw_rays(scene, a, cfg, n));
+        }
+        out
+    }))
 }
 
 /// Packs and balances the maps of one pass.
@@ -505,6 +563,16 @@ fn build_maps(out: trace::PassOutput, color: ColorMode) -> Vec<PhotonMap> {
             PhotonMap::build(hits, c, emitted)
         })
         .collect()
+}
+
+/// `maps` without its empty maps (an empty map is never queried); when none is left, the
+/// lookups of `kind` are recorded as skipped.
+fn drop_empty(stats: &mut Stats, kind: &str, mut maps: Vec<PhotonMap>) -> Vec<PhotonMap> {
+    maps.retain(|m| !m.is_empty());
+    if maps.is_empty() {
+        stats.skip(&format!("lookups.{kind}"), format!("the {kind} map is empty: no photon was stored"));
+    }
+    maps
 }
 
 fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {

@@ -13,7 +13,10 @@
 //! * The caustic map holds light → specular+ → diffuse paths. Caustic photons are aimed: an
 //!   emission sample is kept only if its ray meets the bounding sphere of a specular object
 //!   (a projection map made of spheres); rejected tries still count as emitted, so every photon
-//!   keeps the power `flux / tries` and the estimate stays exact.
+//!   keeps the power `flux / tries` and the estimate stays exact. Without aiming
+//!   ([`PassSpec::aim`] false) caustic photons leave the lights as usual and only the
+//!   light → specular+ → diffuse paths are stored: the same estimate, with fewer photons stored
+//!   per photon traced.
 //! * The indirect map holds photons with at least one diffuse bounce behind them.
 //!
 //! Work is split into fixed chunks, each with its own generator seeded from (seed, pass, chunk),
@@ -190,6 +193,8 @@ pub struct PassSpec<'a> {
     pub max_bounces: u32,
     /// Bounding spheres caustic photons are aimed at.
     pub targets: &'a [Target],
+    /// Whether a caustic pass keeps only emission samples aimed at `targets`.
+    pub aim: bool,
     pub seed: u64,
 }
 
@@ -201,7 +206,7 @@ pub fn trace_pass<A: Accel>(
     spec: &PassSpec<'_>,
     progress: &dyn Progress,
 ) -> PassOutput {
-    let PassSpec { pass, n, color, max_bounces, targets, seed } = *spec;
+    let PassSpec { pass, n, color, max_bounces, targets, aim, seed } = *spec;
     let emitters = lights.emitters();
     let mut alloc_rng = Pcg32::seed_from_u64(mix(seed, pass as u64, u64::MAX));
     let (jobs, emitted) = allocate(emitters, n, color, &mut alloc_rng);
@@ -228,7 +233,7 @@ pub fn trace_pass<A: Accel>(
             for i in start..end {
                 let u_pos = stratum(i, job.count, &mut rng);
                 let Some(em) = lights.sample_emission(e, u_pos, [rng.gen(), rng.gen()]) else { continue };
-                if pass == Pass::Caustic && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
+                if pass == Pass::Caustic && aim && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
                     continue;
                 }
                 paths += 1;
