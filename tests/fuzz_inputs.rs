@@ -14,7 +14,7 @@
 //! this file well under a minute). Inputs that once crashed the loader are kept in
 //! `tests/data/fuzz/` and replayed by `regression_inputs_fail_cleanly`.
 
-use photonmap::scene::{Scene, SceneError};
+use photonmap::scene::{one_line, Scene, SceneError};
 use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::Config;
@@ -433,7 +433,8 @@ fn check_error(e: &SceneError, texts: &[(&Path, &[u8])], files: &[&str]) -> Resu
     }
     let path = error_path(e);
     let name = path.file_name().map_or_else(|| path.to_string_lossy(), |n| n.to_string_lossy());
-    if !shown.contains(&*name) {
+    // Errors show names with control characters escaped, to stay on one line.
+    if !shown.contains(&one_line(&name)) {
         return Err(format!("error does not name the file {name:?}: {shown:?}"));
     }
     if !files.is_empty() && !files.iter().any(|f| *f == name) {
@@ -564,6 +565,20 @@ fn load_with(dir: &Path, target: Target, bytes: &[u8]) -> Result<(), String> {
 // ---------------------------------------------------------------------------------------------
 // The fuzz tests
 // ---------------------------------------------------------------------------------------------
+
+/// Found by `fuzz_scene_toml`: a mesh path with a newline in it. The error must stay on one
+/// line and name the file as it escapes it.
+#[test]
+fn a_file_name_with_a_newline_is_named_escaped() {
+    let dir = cornell_dir();
+    let path = dir.path().join("cornell.toml");
+    let text = TOML.replacen("obj = \"cornell.obj\"", "obj = \"a\\nb.obj\"", 1);
+    assert_ne!(text, TOML);
+    let e = Scene::from_str(&path, &text).expect_err("no such file");
+    let shown = e.to_string();
+    assert!(shown.contains("a\\nb.obj") && !shown.contains('\n'), "{shown:?}");
+    check_error(&e, &[(&path, text.as_bytes())], &[]).unwrap();
+}
 
 #[test]
 fn the_unmutated_inputs_load() {

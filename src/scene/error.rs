@@ -24,8 +24,8 @@ pub enum SceneError {
 }
 
 /// `s` with control characters and line separators escaped, so that an error naming a file or
-/// quoting the input stays on one line.
-fn one_line(s: impl std::fmt::Display) -> String {
+/// quoting the input stays on one line (a file named `a\nb.obj` is shown as `a\\nb.obj`).
+pub fn one_line(s: impl std::fmt::Display) -> String {
     let s = s.to_string();
     if !s.chars().any(|c| c.is_control() || matches!(c, '\u{2028}' | '\u{2029}')) {
         return s;

@@ -10,7 +10,7 @@ mod file;
 mod obj;
 
 pub use camera::Camera;
-pub use error::SceneError;
+pub use error::{one_line, SceneError};
 pub use file::{LightEntry, MaterialEntry, MaterialKind, SceneFile};
 pub use obj::MtlMaterial;
 
