@@ -413,16 +413,6 @@ fn line_count(bytes: &[u8]) -> usize {
     newlines + usize::from(!bytes.is_empty() && !bytes.ends_with(b"\n"))
 }
 
-fn error_path(e: &SceneError) -> &Path {
-    match e {
-        SceneError::Io { path, .. }
-        | SceneError::Toml { path, .. }
-        | SceneError::Field { path, .. }
-        | SceneError::Line { path, .. }
-        | SceneError::File { path, .. } => path,
-    }
-}
-
 /// `Err(reason)` if the error breaks the rule: one line, naming its file, with a line number
 /// inside that file. `texts` gives the content of files loaded from memory; `files`, if not
 /// empty, the names of the files an error may blame.
@@ -431,7 +421,7 @@ fn check_error(e: &SceneError, texts: &[(&Path, &[u8])], files: &[&str]) -> Resu
     if shown.contains('\n') || shown.contains('\r') {
         return Err(format!("error is not one line: {shown:?}"));
     }
-    let path = error_path(e);
+    let path = e.path();
     let name = path.file_name().map_or_else(|| path.to_string_lossy(), |n| n.to_string_lossy());
     // Errors show names with control characters escaped, to stay on one line.
     if !shown.contains(&one_line(&name)) {

@@ -42,6 +42,17 @@ pub fn one_line(s: impl std::fmt::Display) -> String {
 }
 
 impl SceneError {
+    /// The file the error is about.
+    pub fn path(&self) -> &std::path::Path {
+        match self {
+            SceneError::Io { path, .. }
+            | SceneError::Toml { path, .. }
+            | SceneError::Field { path, .. }
+            | SceneError::Line { path, .. }
+            | SceneError::File { path, .. } => path,
+        }
+    }
+
     pub(crate) fn field(
         path: &std::path::Path,
         field: impl Into<String>,
