@@ -77,7 +77,7 @@ pub struct PhotonMap {
     color: Option<MapColor>,
     /// RGB maps pack `power / scale`, a power of two chosen from the largest power channel
     /// ([`pack::rgb9e5_scale`]), so that any light power fits RGB9E5's range (2⁻²⁴ to 2¹⁶
-    /// unscaled).
+    /// unscaled); 1 for per-channel maps, which store `f32` powers.
     scale: f32,
     /// Photon paths emitted to build this map (the estimate's denominator is already folded
     /// into each photon's power; kept for reports).
@@ -89,7 +89,12 @@ impl PhotonMap {
     pub fn build(hits: Vec<PhotonHit>, color: MapColor, emitted: u64) -> Self {
         // A fresh exact-size buffer: collecting in place would keep the larger allocation of
         // `hits` alive for the life of the map.
-        let scale = pack::rgb9e5_scale(hits.iter().map(|h| h.power.max_element()).fold(0.0, f32::max));
+        let scale = match color {
+            MapColor::Rgb => {
+                pack::rgb9e5_scale(hits.iter().map(|h| h.power.max_element()).fold(0.0, f32::max))
+            }
+            MapColor::Channel(_) => 1.0,
+        };
         let mut photons = Vec::with_capacity(hits.len());
         photons.extend(hits.iter().map(|h| Photon {
             pos: h.pos.to_array(),
@@ -116,10 +121,18 @@ impl PhotonMap {
         self.tree.bytes()
     }
 
+    /// A photon's power.
     #[inline]
     fn power(&self, p: &Photon) -> Vec3 {
+        self.packed_power(p) * self.scale
+    }
+
+    /// A photon's power over the map's `scale` (a power of two, so the gathers sum these and
+    /// scale the sum once, with the same result).
+    #[inline]
+    fn packed_power(&self, p: &Photon) -> Vec3 {
         match self.color {
-            Some(MapColor::Rgb) => pack::rgb9e5_decode(p.power) * self.scale,
+            Some(MapColor::Rgb) => pack::rgb9e5_decode(p.power),
             Some(MapColor::Channel(c)) => {
                 let mut v = Vec3::ZERO;
                 v[c] = f32::from_bits(p.power);
@@ -153,10 +166,12 @@ impl PhotonMap {
             let p = self.tree.get(nb.index);
             let wi = pack::decode_dir_oct(p.dir);
             if wi.dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * m.eval(n, wo, wi) * self.power(p);
+                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2)
+                    * m.eval(n, wo, wi)
+                    * self.packed_power(p);
             }
         }
-        sum / (PI * r2)
+        sum * self.scale / (PI * r2)
     }
 
     /// Irradiance at `x` on the side of `ns` (unit): `sum_p w_p power_p / (pi r^2)`, for
@@ -168,10 +183,10 @@ impl PhotonMap {
         for nb in scratch.iter() {
             let p = self.tree.get(nb.index);
             if pack::decode_dir_oct_unnormalized(p.dir).dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.power(p);
+                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
             }
         }
-        sum / (PI * r2)
+        sum * self.scale / (PI * r2)
     }
 
     /// Gathers the photons near `x` into `scratch` (a disc flattened along `ns`) and returns the
