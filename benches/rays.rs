@@ -26,6 +26,7 @@ use criterion::{BenchmarkId, Criterion, Throughput};
 use photonmap::accel::bvh::Bvh;
 use photonmap::accel::{init_tracing_thread, Accel, Hit};
 use photonmap::agree::{generate_rays, CameraLike, RayKind};
+use photonmap::bench::median;
 use photonmap::geometry::{Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use std::hint::black_box;
@@ -147,11 +148,6 @@ fn cast<A: Accel>(accel: &A, rays: &[Ray], mode: Mode, parallel: bool) -> usize 
     } else {
         cast_seq(accel, rays, mode)
     }
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
 }
 
 /// Median over [`RUNS`] runs of M rays/s, after one warm-up run.
