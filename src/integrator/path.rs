@@ -82,7 +82,7 @@ pub fn radiance_path_from<A: Accel>(
         }
 
         // Next-event estimation.
-        if !m.is_delta() && !s.lights.is_empty() {
+        if !m.is_specular() && !s.lights.is_empty() {
             l += beta * light_sample(s, &hit, wo, m, rng, c);
         }
 

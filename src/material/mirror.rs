@@ -56,7 +56,7 @@ mod tests {
         let wi = dir(Vec3::Z, 30.0, 180.0);
         assert_eq!(m.eval(Vec3::Z, wo, wi), Vec3::ZERO);
         assert_eq!(m.pdf(Vec3::Z, wo, wi), 0.0);
-        assert!(m.is_delta() && !m.is_diffuse_like());
+        assert!(m.is_specular() && !m.is_diffuse_like());
         let s = m.sample(Vec3::Z, wo, 0.1, [0.0; 2]).unwrap();
         assert!((s.weight(Vec3::Z) - Vec3::splat(0.8)).abs().max_element() < 1e-5);
         assert!((s.wi - wi).length() < 1e-5);

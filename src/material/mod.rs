@@ -155,11 +155,6 @@ impl Material {
         }
     }
 
-    /// Whether every lobe is a delta lobe (same as [`Material::is_specular`] for these kinds).
-    pub fn is_delta(&self) -> bool {
-        self.is_specular()
-    }
-
     /// Whether the surface has a non-delta (diffuse or glossy) component, i.e. stores photons and
     /// gathers light.
     pub fn is_diffuse_like(&self) -> bool {
