@@ -22,7 +22,8 @@ use criterion::Criterion;
 use photonmap::bench::median;
 use photonmap::config::{CausticPass, Component, RenderSettings};
 use photonmap::film::{compare, Film};
-use photonmap::integrator::{render_scene, Quiet, RenderOutput};
+use photonmap::frame::Quiet;
+use photonmap::integrator::{render_scene, RenderOutput};
 use photonmap::scene::Scene;
 use std::path::Path;
 use std::time::Duration;
@@ -160,7 +161,7 @@ fn main() {
     }
 
     let defaults = RenderSettings::default().resolve(1, 1).unwrap();
-    let budget = defaults.caustic_photons;
+    let budget = defaults.integrator.photon_passes().expect("photon mapping by default").caustic_photons;
     // Ten times the photons and a wider gather (k = 200, so a radius ~0.55 of the default's
     // and half its noise): a reference better than every row on both counts. It has the rows'
     // seed, so the same camera samples (its photons differ: the budget changes every emitter's

@@ -15,9 +15,11 @@
 
 use crate::accel::{Accel, AccelError, Hit};
 use crate::agree::{generate_rays, RayKind};
+use crate::choice::Choice;
 use crate::config::RenderConfig;
+use crate::frame::{Progress, Quiet};
 use crate::geometry::Ray;
-use crate::integrator::{render_scene_measured, Control, Quiet};
+use crate::integrator::{Control, Prepared, RenderOutput};
 use crate::scene::Scene;
 use crate::stats::{RawRays, Stats};
 use rand::{Rng, SeedableRng};
@@ -111,6 +113,23 @@ pub fn raw_rays<A: Accel>(scene: &Scene, accel: &A, cfg: &RenderConfig, per_kind
         rays_per_kind: per_kind as u64,
         seconds: start.elapsed().as_secs_f64(),
     }
+}
+
+/// Renders `scene` as `cfg` says, then measures the raw rate of the same accelerator on about
+/// `per_kind` rays of each kind like the render's, on the same threads ([`raw_rays`], recorded
+/// by [`Stats::set_raw_rays`]).
+pub fn render_calibrated(
+    scene: &Scene,
+    cfg: &RenderConfig,
+    progress: &dyn Progress,
+    control: Control<'_>,
+    per_kind: usize,
+) -> Result<RenderOutput, AccelError> {
+    let prepared = Prepared::new(scene, cfg)?;
+    let mut out = prepared.render(cfg, progress, control);
+    let raw = crate::dispatch!(prepared.accel(), a => raw_rays(prepared.scene(), a, cfg, per_kind));
+    out.stats.set_raw_rays(raw);
+    Ok(out)
 }
 
 /// What `photonmap bench` does.
@@ -253,7 +272,7 @@ pub fn run(
     for run in 0..spec.runs {
         for ((pool, &threads), done) in pools.iter().zip(&spec.threads).zip(&mut runs) {
             let out = pool.install(|| {
-                render_scene_measured(scene, cfg, &Quiet, Control::default(), Some(spec.raw_rays_per_kind))
+                render_calibrated(scene, cfg, &Quiet, Control::default(), spec.raw_rays_per_kind)
             })?;
             let s = out.stats.wall_seconds + out.stats.seconds("accel");
             on_run(threads, run, s);
@@ -289,9 +308,9 @@ pub fn run(
         triangles: scene.mesh.len(),
         width: cfg.width,
         height: cfg.height,
-        integrator: format!("{:?}", cfg.integrator).to_lowercase(),
-        photons: cfg.photons,
-        caustic_photons: cfg.caustic_photons,
+        integrator: cfg.integrator.kind().name().to_string(),
+        photons: cfg.integrator.photon_passes().map_or(0, |p| p.photons),
+        caustic_photons: cfg.integrator.photon_passes().map_or(0, |p| p.caustic_photons),
         spp: cfg.spp,
         peak_memory_bytes: crate::stats::peak_memory_bytes().unwrap_or(0),
         load_average: [load_before, load_average()],

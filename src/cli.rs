@@ -1,10 +1,10 @@
 //! Command-line interface: clap definitions, validated once into library configs.
 
+use clap::builder::TypedValueParser;
 use clap::{Args, Parser, Subcommand};
 use photonmap::accel::AccelKind;
-use photonmap::config::{
-    CausticPass, ColorMode, Component, IndirectMode, Integrator, Kernel, RenderSettings,
-};
+use photonmap::choice::Choice;
+use photonmap::config::RenderSettings;
 use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
@@ -66,7 +66,7 @@ pub struct RenderArgs {
     /// Output image, float RGB OpenEXR.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also write a tone-mapped sRGB PNG preview here.
+    /// Also write an sRGB PNG preview here (linear radiance clamped at 1).
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Write a JSON report (stages, photons, rays, timings) here.
@@ -91,125 +91,77 @@ pub struct RenderArgs {
     pub settings: SettingsArgs,
 }
 
-/// Settings that may also be given in the scene's `[render]` table; flags win.
-#[derive(Args, Debug, Default)]
-pub struct SettingsArgs {
-    /// Ray-casting backend [default: embree when built with it, else bvh].
-    #[arg(long, value_enum)]
-    pub accel: Option<AccelKind>,
-    /// Use Embree's robust (watertight) mode [default: true].
-    #[arg(long)]
-    pub robust: Option<bool>,
-    /// Photons emitted for the indirect map [default: 1000000].
-    #[arg(long)]
-    pub photons: Option<u64>,
-    /// Photons aimed at specular objects for the caustic map [default: 300000].
-    #[arg(long)]
-    pub caustic_photons: Option<u64>,
-    /// Camera samples per pixel [default: 64].
-    #[arg(long)]
-    pub spp: Option<u32>,
-    /// Random seed; the same seed gives the same image for any thread count [default: 1].
-    #[arg(long)]
-    pub seed: Option<u64>,
-    /// Longest photon path [default: 64].
-    #[arg(long)]
-    pub max_bounces: Option<u32>,
-    /// Longest camera path through mirrors and glass [default: 16].
-    #[arg(long)]
-    pub max_depth: Option<u32>,
-    /// Photons per indirect radiance estimate [default: 100].
-    #[arg(long)]
-    pub gather_photons: Option<u32>,
-    /// Largest indirect gather radius, scene units [default: a tenth of the scene radius].
-    #[arg(long)]
-    pub gather_radius: Option<f32>,
-    /// Photons per caustic radiance estimate [default: 60].
-    #[arg(long)]
-    pub caustic_gather_photons: Option<u32>,
-    /// Largest caustic gather radius [default: a quarter of the indirect one].
-    #[arg(long)]
-    pub caustic_gather_radius: Option<f32>,
-    /// Indirect light from the map's estimate or by final gathering [default: estimate].
-    #[arg(long, value_enum)]
-    pub indirect: Option<IndirectMode>,
-    /// Rays per final gather [default: 32].
-    #[arg(long)]
-    pub final_gather_rays: Option<u32>,
-    /// Photons carry one colour channel (three maps, the lecture's way) or RGB [default: rgb].
-    #[arg(long, value_enum)]
-    pub color: Option<ColorMode>,
-    /// Density-estimation kernel [default: cone].
-    #[arg(long, value_enum)]
-    pub kernel: Option<Kernel>,
-    /// Shadow-ray samples per shading point [default: 1].
-    #[arg(long)]
-    pub light_samples: Option<u32>,
-    /// Precompute irradiance at photon positions and read it at diffuse surfaces instead of
-    /// gathering photons there (Christensen 1999) [default: true].
-    #[arg(long)]
-    pub irradiance_cache: Option<bool>,
-    /// Render only one term of the sum: emitted, direct, caustic or indirect [default: all].
-    #[arg(long, value_enum)]
-    pub component: Option<Component>,
-    /// Photon mapping, or the path tracer (next-event estimation and MIS) as a cross-check; the
-    /// path tracer ignores the photon settings and uses --max-depth for every bounce
-    /// [default: photon].
-    #[arg(long, value_enum)]
-    pub integrator: Option<Integrator>,
-    /// Render this many passes and average them (progressive photon mapping shrinks its radii
-    /// between passes) [default: 1; sppm: 64 unless --time is given].
-    #[arg(long)]
-    pub passes: Option<u32>,
-    /// Time budget in seconds from the start of the command: passes stop before the budget
-    /// would be exceeded and the image so far is written.
-    #[arg(long, value_name = "SECONDS")]
-    pub time: Option<f64>,
-    /// Progressive photon mapping's alpha, the fraction of new photons kept when the radius
-    /// shrinks, in (0, 1) [default: 0.7].
-    #[arg(long)]
-    pub alpha: Option<f32>,
-    /// Aim caustic photons at the mirrors and glass (bounding-sphere projection map); false:
-    /// emit them from the lights as usual and keep the light-specular-diffuse paths
-    /// [default: true].
-    #[arg(long)]
-    pub caustic_aim: Option<bool>,
-    /// Run the caustic photon pass when the scene analysis says it is needed (auto), always
-    /// (on) or never (off) [default: auto].
-    #[arg(long, value_enum)]
-    pub caustic_pass: Option<CausticPass>,
-}
+/// Settings that may also be given in the scene's `[render]` table; flags win. One flag per
+/// field of [`RenderSettings`] (`--gather-photons` for `gather_photons`), with its doc comment
+/// as help and its own parser, so the flags and the file keys cannot drift apart.
+#[derive(Debug, Default, Clone)]
+pub struct SettingsArgs(pub RenderSettings);
 
 impl SettingsArgs {
     pub fn to_settings(&self) -> RenderSettings {
-        RenderSettings {
-            accel: self.accel,
-            photons: self.photons,
-            caustic_photons: self.caustic_photons,
-            spp: self.spp,
-            seed: self.seed,
-            max_bounces: self.max_bounces,
-            max_depth: self.max_depth,
-            gather_photons: self.gather_photons,
-            gather_radius: self.gather_radius,
-            caustic_gather_photons: self.caustic_gather_photons,
-            caustic_gather_radius: self.caustic_gather_radius,
-            indirect: self.indirect,
-            final_gather_rays: self.final_gather_rays,
-            color: self.color,
-            kernel: self.kernel,
-            light_samples: self.light_samples,
-            robust: self.robust,
-            irradiance_cache: self.irradiance_cache,
-            component: self.component,
-            integrator: self.integrator,
-            passes: self.passes,
-            time: self.time,
-            alpha: self.alpha,
-            caustic_aim: self.caustic_aim,
-            caustic_pass: self.caustic_pass,
-        }
+        self.0.clone()
     }
+}
+
+/// `--gather-photons` for `gather_photons`.
+fn flag(name: &str) -> String {
+    name.replace('_', "-")
+}
+
+impl clap::FromArgMatches for SettingsArgs {
+    fn from_arg_matches(m: &clap::ArgMatches) -> Result<Self, clap::Error> {
+        let mut settings = RenderSettings::default();
+        for f in RenderSettings::FIELDS {
+            if let Some(text) = m.get_one::<String>(f.name) {
+                // Values were checked by each flag's parser; this cannot fail.
+                settings.set(f.name, text).map_err(|e| {
+                    clap::Error::raw(
+                        clap::error::ErrorKind::ValueValidation,
+                        format!("--{}: {e}\n", flag(f.name)),
+                    )
+                })?;
+            }
+        }
+        Ok(SettingsArgs(settings))
+    }
+
+    fn update_from_arg_matches(&mut self, m: &clap::ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for SettingsArgs {
+    fn augment_args(cmd: clap::Command) -> clap::Command {
+        RenderSettings::FIELDS.iter().fold(cmd, |cmd, f| {
+            let help: String = f.help.split_whitespace().collect::<Vec<_>>().join(" ");
+            let help = help.trim_end_matches('.').to_string();
+            let check = f.check;
+            let arg = clap::Arg::new(f.name)
+                .long(flag(f.name))
+                .value_name(f.value_name)
+                .help(help)
+                .value_parser(move |text: &str| check(text).map(|()| text.to_string()));
+            let arg = if f.choices.is_empty() {
+                arg
+            } else {
+                let names = f.choices.iter().map(|&c| clap::builder::PossibleValue::new(c));
+                let choices = clap::builder::PossibleValuesParser::new(names);
+                arg.value_parser(choices)
+            };
+            cmd.arg(arg)
+        })
+    }
+
+    fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
+        Self::augment_args(cmd)
+    }
+}
+
+/// A flag taking the name of one variant of `T`.
+fn choice<T: Choice + Send + Sync>() -> impl clap::builder::TypedValueParser<Value = T> {
+    clap::builder::PossibleValuesParser::new(T::NAMES)
+        .map(|name| T::from_name(&name).expect("clap accepts only the possible values"))
 }
 
 #[derive(Args, Debug)]
@@ -244,7 +196,7 @@ pub struct ConvergeArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32")]
     pub budgets: Vec<f64>,
     /// Methods to compare [default: all].
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, value_parser = choice::<photonmap::converge::Method>(), value_delimiter = ',')]
     pub methods: Vec<photonmap::converge::Method>,
     /// Write the points as CSV here.
     #[arg(long)]
@@ -264,7 +216,7 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub threads: Option<usize>,
     /// Ray-casting backend [default: embree when built with it, else bvh].
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = choice::<AccelKind>())]
     pub accel: Option<AccelKind>,
 }
 
@@ -276,7 +228,7 @@ pub struct StressArgs {
     #[arg(long)]
     pub filter: Option<String>,
     /// Render with these backends only [default: embree and bvh, or bvh without Embree].
-    #[arg(long, value_enum, value_delimiter = ',')]
+    #[arg(long, value_parser = choice::<AccelKind>(), value_delimiter = ',')]
     pub accel: Vec<AccelKind>,
     /// Rays per backend-agreement check (0 skips them).
     #[arg(long, default_value_t = 10_000)]

@@ -8,49 +8,39 @@
 //! bias of the pass's photon count. The x axis is the measured wall time of the render
 //! (acceleration structure included), which exceeds the budget when one pass takes longer.
 
-use crate::config::{ColorMode, IndirectMode, Integrator, RenderSettings};
+use crate::choice::Choice;
+use crate::config::{ColorMode, IndirectMode, IntegratorKind, RenderSettings};
 use crate::film::{compare, Film};
-use crate::integrator::{render_scene_with, Control, Quiet};
+use crate::frame::Quiet;
+use crate::integrator::{render_scene_with, Control};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-/// A rendering method: an integrator with the settings of one pass.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, clap::ValueEnum)]
-#[serde(rename_all = "kebab-case")]
-pub enum Method {
-    /// Two-pass photon mapping, RGB photons, radiance estimate (200k + 50k photons, 16 spp a pass).
-    PhotonRgb,
-    /// The same with the lecture's three per-channel maps.
-    PhotonChannel,
-    /// Two-pass photon mapping with final gathering (200k + 50k photons, 4 spp x 16 rays a pass).
-    FinalGather,
-    /// Stochastic progressive photon mapping (its defaults: 100k + 30k photons, 4 spp a pass).
-    Sppm,
-    /// The path tracer, 4 spp a pass.
-    Path,
+crate::choice! {
+    /// A rendering method: an integrator with the settings of one pass.
+    pub enum Method {
+        /// Two-pass photon mapping, RGB photons, radiance estimate (200k + 50k photons, 16 spp a
+        /// pass).
+        PhotonRgb = "photon-rgb",
+        /// The same with the lecture's three per-channel maps.
+        PhotonChannel = "photon-channel",
+        /// Two-pass photon mapping with final gathering (200k + 50k photons, 4 spp x 16 rays a
+        /// pass).
+        FinalGather = "final-gather",
+        /// Stochastic progressive photon mapping (its defaults: 100k + 30k photons, 4 spp a pass).
+        Sppm = "sppm",
+        /// The path tracer, 4 spp a pass.
+        Path = "path",
+    }
 }
 
 impl Method {
-    pub const ALL: [Method; 5] =
-        [Method::PhotonRgb, Method::PhotonChannel, Method::FinalGather, Method::Sppm, Method::Path];
-
-    /// The name used on the command line, in tables and in the CSV.
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::PhotonRgb => "photon-rgb",
-            Method::PhotonChannel => "photon-channel",
-            Method::FinalGather => "final-gather",
-            Method::Sppm => "sppm",
-            Method::Path => "path",
-        }
-    }
-
     /// The settings of one pass (the scene's own `[render]` table fills the rest).
     pub fn settings(self) -> RenderSettings {
         let photon = RenderSettings {
-            integrator: Some(Integrator::Photon),
+            integrator: Some(IntegratorKind::Photon),
             photons: Some(200_000),
             caustic_photons: Some(50_000),
             spp: Some(16),
@@ -67,9 +57,9 @@ impl Method {
                 spp: Some(4),
                 ..photon
             },
-            Method::Sppm => RenderSettings { integrator: Some(Integrator::Sppm), ..Default::default() },
+            Method::Sppm => RenderSettings { integrator: Some(IntegratorKind::Sppm), ..Default::default() },
             Method::Path => {
-                RenderSettings { integrator: Some(Integrator::Path), spp: Some(4), ..Default::default() }
+                RenderSettings { integrator: Some(IntegratorKind::Path), spp: Some(4), ..Default::default() }
             }
         }
     }

@@ -13,9 +13,11 @@
 pub mod accel;
 pub mod agree;
 pub mod bench;
+pub mod choice;
 pub mod config;
 pub mod converge;
 pub mod film;
+pub mod frame;
 pub mod geometry;
 pub mod integrator;
 pub mod light;

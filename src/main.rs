@@ -95,8 +95,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     let pool = pool(args.threads)?;
     let progress = progress::Bars::new(args.quiet);
     let load = stats.stages.clone();
-    let progressive = cfg.time.is_some() || cfg.passes.is_some_and(|p| p > 1);
-    install_interrupt_handler(progressive)?;
+    install_interrupt_handler(cfg.is_progressive())?;
     let checkpoint = |passes: u32, film: &photonmap::film::Film| {
         let written = film.write_exr(&args.output).and_then(|()| match &args.png {
             Some(png) => film.write_png(png),
@@ -111,13 +110,17 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     }
     let control = integrator::Control {
         cancel: Some(&STOP),
-        checkpoint: args.checkpoint_every.map(|k| (k, &checkpoint as integrator::progressive::Checkpoint)),
+        checkpoint: args.checkpoint_every.map(|k| (k, &checkpoint as integrator::Checkpoint)),
         started: wall,
     };
-    // With --stats, a short measurement of the accelerator alone follows the render.
-    let calibrate = args.stats.as_ref().map(|_| photonmap::bench::STATS_CALIBRATION_RAYS);
-    let mut output =
-        pool.install(|| integrator::render_scene_measured(&scene, &cfg, &progress, control, calibrate))?;
+    let mut output = pool.install(|| match args.stats {
+        // With --stats, a short measurement of the accelerator alone follows the render.
+        Some(_) => {
+            let rays = photonmap::bench::STATS_CALIBRATION_RAYS;
+            photonmap::bench::render_calibrated(&scene, &cfg, &progress, control, rays)
+        }
+        None => integrator::render_scene_with(&scene, &cfg, &progress, control),
+    })?;
     output.stats.stages.splice(0..0, load);
     output.stats.scene = args.scene.display().to_string();
     let mut stats = output.stats;
@@ -209,6 +212,7 @@ fn compare(
 }
 
 fn converge(args: cli::ConvergeArgs) -> Result<()> {
+    use photonmap::choice::Choice;
     use photonmap::converge::{self, Method, Study};
     use photonmap::film::Film;
     let scene = Scene::load(&args.scene)?;

@@ -1,7 +1,7 @@
 //! Progress bars on stderr (indicatif) when it is a terminal; silent otherwise or with --quiet.
 
 use indicatif::{ProgressBar, ProgressStyle};
-use photonmap::integrator::Progress;
+use photonmap::frame::Progress;
 use std::io::IsTerminal;
 use std::sync::Mutex;
 

@@ -263,6 +263,19 @@ pub fn radical_inverse_3(mut i: u64) -> f64 {
     reversed as f64 * scale
 }
 
+/// A well-mixed 64-bit seed from three values (SplitMix64 finaliser): how every generator of a
+/// render is seeded from the render's seed, a constant naming its purpose, and the index of its
+/// piece of work, so that images do not depend on how work is split among threads.
+pub fn derive_seed(a: u64, b: u64, c: u64) -> u64 {
+    let mut z = a ^ b.rotate_left(21) ^ c.rotate_left(42) ^ 0x9E37_79B9_7F4A_7C15;
+    for _ in 0..2 {
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^= z >> 31;
+    }
+    z
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,9 +10,10 @@
 //! To re-record after an intended change: `PHOTONMAP_RECORD_GOLDEN=1 cargo test --test golden`.
 
 use photonmap::accel::AccelKind;
-use photonmap::config::{ColorMode, Component, IndirectMode, Integrator, RenderSettings};
+use photonmap::config::{ColorMode, Component, IndirectMode, IntegratorKind, RenderSettings};
 use std::fmt::Write;
 use std::path::Path;
+#[allow(dead_code)]
 mod common;
 
 use common::{render_checked, scene};
@@ -47,14 +48,14 @@ fn variants() -> Vec<(&'static str, RenderSettings)> {
         (
             "sppm",
             RenderSettings {
-                integrator: Some(Integrator::Sppm),
+                integrator: Some(IntegratorKind::Sppm),
                 passes: Some(3),
                 photons: Some(5_000),
                 caustic_photons: Some(2_000),
                 ..base.clone()
             },
         ),
-        ("path", RenderSettings { integrator: Some(Integrator::Path), spp: Some(4), ..base }),
+        ("path", RenderSettings { integrator: Some(IntegratorKind::Path), spp: Some(4), ..base }),
     ]
 }
 

@@ -2,7 +2,7 @@
 //! Cornell box against the independent reference (`tests/data/refs/`, Mitsuba 3, downsampled by
 //! 4), agreement with the photon mapper, and determinism across thread counts.
 
-use photonmap::config::{Integrator, RenderSettings};
+use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::compare;
 use photonmap::integrator::RenderOutput;
 use photonmap::scene::Scene;
@@ -11,7 +11,12 @@ mod common;
 use common::{reference, render_checked, scene};
 
 fn path_settings() -> RenderSettings {
-    RenderSettings { integrator: Some(Integrator::Path), spp: Some(64), seed: Some(3), ..Default::default() }
+    RenderSettings {
+        integrator: Some(IntegratorKind::Path),
+        spp: Some(64),
+        seed: Some(3),
+        ..Default::default()
+    }
 }
 
 fn render(s: &Scene, settings: &RenderSettings, size: u32) -> RenderOutput {
@@ -59,7 +64,7 @@ fn path_and_photon_agree_on_cornell() {
     let s = scene("cornell");
     let path = render(&s, &path_settings(), 64).film.mean();
     let photon_settings = RenderSettings {
-        integrator: Some(Integrator::Photon),
+        integrator: Some(IntegratorKind::Photon),
         photons: Some(200_000),
         caustic_photons: Some(200_000),
         ..path_settings()

@@ -2,7 +2,7 @@
 //! passes are added, a fixed seed gives the same image for any thread count, passes of the
 //! other integrators average, and Ctrl-C writes the image so far.
 
-use photonmap::config::{Integrator, RenderSettings};
+use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::{compare, Film};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -12,7 +12,7 @@ use common::{reference, render_checked, scene};
 
 fn sppm(passes: u32) -> RenderSettings {
     RenderSettings {
-        integrator: Some(Integrator::Sppm),
+        integrator: Some(IntegratorKind::Sppm),
         passes: Some(passes),
         photons: Some(20_000),
         caustic_photons: Some(10_000),
@@ -72,7 +72,7 @@ fn sppm_is_deterministic_across_thread_counts() {
 fn path_passes_average() {
     let s = scene("cornell");
     let base = RenderSettings {
-        integrator: Some(Integrator::Path),
+        integrator: Some(IntegratorKind::Path),
         spp: Some(4),
         seed: Some(9),
         ..Default::default()

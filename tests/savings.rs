@@ -3,9 +3,11 @@
 //! estimate as aimed ones, and the raw ray rates of `--stats` and `photonmap bench`.
 
 use photonmap::accel::{AccelKind, AccelOptions, AnyAccel};
+use photonmap::bench::render_calibrated;
 use photonmap::config::{CausticPass, Component, RenderSettings};
-use photonmap::integrator::lights::LightSet;
-use photonmap::integrator::{render_scene_measured, Control, Quiet, RenderOutput};
+use photonmap::frame::Quiet;
+use photonmap::integrator::{render_scene, Control, RenderOutput};
+use photonmap::light::LightSet;
 use photonmap::photon::trace::{self, Pass, PassSpec};
 use photonmap::scene::Scene;
 use photonmap::stats::Stage;
@@ -92,7 +94,7 @@ fn zero_power_light_is_reported_and_does_nothing() {
 
 /// Total power of a caustic pass's stored photons and how many there are.
 fn caustic_flux(s: &Scene, accel: &AnyAccel, aim: bool, n: u64, seed: u64) -> (f64, usize, u64) {
-    let lights = LightSet::new(s);
+    let lights = LightSet::new(&s.lights, &s.mesh, &s.tri_material, &s.materials);
     let targets = trace::specular_targets(s);
     let spec = PassSpec {
         pass: Pass::Caustic,
@@ -119,7 +121,7 @@ fn caustic_flux(s: &Scene, accel: &AnyAccel, aim: bool, n: u64, seed: u64) -> (f
 fn aiming_keeps_the_caustic_estimate() {
     let s = scene("caustics");
     let accel = AnyAccel::build(AccelKind::Bvh, &s.mesh, AccelOptions::default()).unwrap();
-    let lights = LightSet::new(&s);
+    let lights = LightSet::new(&s.lights, &s.mesh, &s.tri_material, &s.materials);
     let acceptance = trace::target_acceptance(&lights, &trace::specular_targets(&s), 1 << 16, 1);
     let aimed_tries = (20_000.0 / acceptance).ceil() as u64;
     let (on, n_on, paths_on) = caustic_flux(&s, &accel, true, aimed_tries, 11);
@@ -176,9 +178,9 @@ fn aiming_keeps_the_caustic_estimate() {
 fn raw_ray_rates_are_measured_when_asked() {
     let s = scene("cornell");
     let cfg = s.render.overridden_by(&quick()).resolve(16, 16).unwrap();
-    let plain = render_scene_measured(&s, &cfg, &Quiet, Control::default(), None).unwrap();
+    let plain = render_scene(&s, &cfg, &Quiet).unwrap();
     assert!(plain.stats.raw_rays.is_none() && plain.stats.rays_to_raw_ratio == 0.0);
-    let out = render_scene_measured(&s, &cfg, &Quiet, Control::default(), Some(4096)).unwrap();
+    let out = render_calibrated(&s, &cfg, &Quiet, Control::default(), 4096).unwrap();
     let raw = out.stats.raw_rays.expect("raw rates");
     let rates = [raw.camera, raw.incoherent, raw.shadow];
     assert!(rates.iter().all(|r| r.is_finite() && *r > 0.0), "{raw:?}");

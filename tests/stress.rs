@@ -111,7 +111,7 @@ fn every_case_is_tested() {
 fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
     use photonmap::config::Kernel;
     use photonmap::geometry::Vec3;
-    use photonmap::photon::irradiance::{pick_sites, IrradianceCache};
+    use photonmap::photon::irradiance::{pick_sites, PrecomputedIrradiance};
     use photonmap::photon::map::{GatherParams, MapColor, PhotonHit, PhotonMap};
     let estimate = |k: f32| {
         let n = 100;
@@ -128,7 +128,7 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
         let map = PhotonMap::build(hits, MapColor::Rgb, (n * n) as u64);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
         let cache =
-            IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
+            PrecomputedIrradiance::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
                 Vec3::splat(k)
             });
         let x = Vec3::new(0.5, 0.0, 0.5);
@@ -159,8 +159,8 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
 #[test]
 fn shadow_rays_do_not_hit_the_light_they_aim_at_far_from_the_origin() {
     use photonmap::accel::{bvh::Bvh, Accel};
+    use photonmap::frame::direct::SHADOW_MARGIN;
     use photonmap::geometry::{offset_ray_origin, Ray, Vec3};
-    use photonmap::integrator::direct::SHADOW_MARGIN;
     use photonmap::light::area_lights;
     use rand::{Rng, SeedableRng};
     let scene = stress::scenes::furnace(1.0, Vec3::splat(1e5));
@@ -195,8 +195,9 @@ fn shadow_rays_do_not_hit_the_light_they_aim_at_far_from_the_origin() {
 #[test]
 fn furnace_far_from_the_origin_renders_as_at_the_origin() {
     use photonmap::config::RenderSettings;
+    use photonmap::frame::Quiet;
     use photonmap::geometry::Vec3;
-    use photonmap::integrator::{render_scene, Quiet};
+    use photonmap::integrator::render_scene;
     let settings = RenderSettings { spp: Some(8), photons: Some(20_000), ..Default::default() };
     let mean = |offset: f32| {
         let scene = stress::scenes::furnace(1.0, Vec3::splat(offset));
@@ -216,8 +217,9 @@ fn embree_gives_the_same_hits_on_the_same_rays_every_run() {
     use photonmap::accel::{Accel, AccelKind, AccelOptions};
     use photonmap::agree::generate_rays;
     use photonmap::config::RenderSettings;
+    use photonmap::frame::Quiet;
     use photonmap::geometry::Ray;
-    use photonmap::integrator::{render_scene, Quiet};
+    use photonmap::integrator::render_scene;
     let scene = stress::scenes::furnace(1.0, photonmap::geometry::Vec3::splat(1e5));
     let mesh = photonmap::geometry::TriangleMesh::parametric_sphere(64, 128, |t, p| {
         photonmap::geometry::Vec3::new(t.sin() * p.cos(), t.cos(), t.sin() * p.sin())

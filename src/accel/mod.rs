@@ -56,16 +56,17 @@ pub trait Accel: Send + Sync {
     }
 }
 
-/// Which backend to build.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Deserialize, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AccelKind {
-    /// Intel Embree through the system library (the default when built with the `embree` feature).
-    Embree,
-    /// The pure-Rust BVH.
-    Bvh,
-    /// Brute force; for tiny scenes and tests.
-    Naive,
+crate::choice! {
+    /// Which backend to build.
+    pub enum AccelKind {
+        /// Intel Embree through the system library (the default when built with the `embree`
+        /// feature).
+        Embree = "embree",
+        /// The pure-Rust BVH.
+        Bvh = "bvh",
+        /// Brute force; for tiny scenes and tests.
+        Naive = "naive",
+    }
 }
 
 impl AccelKind {

@@ -10,18 +10,22 @@
 //! continues the path. Russian roulette starts after the third bounce, survival
 //! `min(max throughput component, 0.95)`.
 //!
-//! Depth: `cfg.max_depth` bounds every bounce (diffuse, glossy and specular alike), counted
+//! Depth: `max_depth` bounds every bounce (diffuse, glossy and specular alike), counted
 //! after the camera ray, so emission is gathered at vertices `0..=max_depth` and light is
 //! sampled at vertices `0..max_depth`. In the white furnace (albedo `a`, emission `Le`
 //! everywhere) the estimate converges to `Le (1 - a^(d+1)) / (1 - a)`; the default depth 16 is
 //! within 8e-6 relative of the infinite-depth value there, so path mode keeps that default.
 
-use super::camera::SurfaceHit;
-use super::direct::visible;
-use super::{Counters, Shared};
+use super::passes::{camera_stage, Pass, PassRenderer};
 use crate::accel::{Accel, Hit};
+use crate::config::PathConfig;
+use crate::film::Film;
+use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
+use crate::frame::direct::light_sample;
+use crate::frame::{Counters, Frame, Progress};
 use crate::geometry::Ray;
 use crate::sampling::power_heuristic;
+use crate::stats::Stats;
 use glam::Vec3;
 use rand::Rng;
 use rand_pcg::Pcg32;
@@ -32,22 +36,59 @@ pub const RR_START_DEPTH: u32 = 3;
 /// Highest survival probability of Russian roulette (so every path ends eventually).
 pub const RR_MAX_SURVIVAL: f32 = 0.95;
 
-/// Radiance arriving along a camera ray (the camera ray is traced and counted here).
-pub fn radiance_path<A: Accel>(s: &Shared<'_, A>, ray: Ray, rng: &mut Pcg32, c: &mut Counters) -> Vec3 {
-    c.rays.camera += 1;
-    radiance_path_from(s, ray, s.accel.intersect(&ray), rng, c)
+/// Why the photon stages are skipped.
+const PATH_TRACER: &str = "path tracer";
+
+/// The path tracer over a render's passes.
+pub struct PathTracer<'f, 'a, A: Accel> {
+    frame: &'f Frame<'a, A>,
+    cfg: &'f PathConfig,
+}
+
+impl<'f, 'a, A: Accel> PathTracer<'f, 'a, A> {
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f PathConfig) -> Self {
+        PathTracer { frame, cfg }
+    }
+}
+
+impl<A: Accel> PassRenderer for PathTracer<'_, '_, A> {
+    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+        for stage in ["photons.indirect", "photons.caustic", "irradiance"] {
+            stats.skip(stage, PATH_TRACER);
+        }
+        let frame = self.frame;
+        let max_depth = self.cfg.max_depth;
+        let mut pixels = vec![(); frame.camera.width as usize * frame.camera.height as usize];
+        camera_stage(stats, progress, frame.camera.height, "always (path tracer)", || {
+            let width = frame.camera.width as usize;
+            for_each_pixel(
+                width,
+                &mut pixels,
+                pass.seed,
+                progress,
+                |x, y, _, rng, batch: &mut CameraBatch, c| {
+                    frame.camera_rays(&pass.samples, x, y, batch, c);
+                    let mut mean = SampleMean::default();
+                    for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
+                        mean.add(radiance(frame, max_depth, *ray, *hit, rng, c), c);
+                    }
+                    mean.mean()
+                },
+            )
+        })
+    }
 }
 
 /// Radiance arriving along a camera ray whose first hit `first` is already known (traced and
 /// counted by the caller, as in a batch of primary rays).
-pub fn radiance_path_from<A: Accel>(
-    s: &Shared<'_, A>,
+pub fn radiance<A: Accel>(
+    s: &Frame<'_, A>,
+    max_depth: u32,
     mut ray: Ray,
     first: Option<Hit>,
     rng: &mut Pcg32,
     c: &mut Counters,
 ) -> Vec3 {
-    let max_depth = s.cfg.max_depth;
     let mis = s.lights.has_area();
     let mut beta = Vec3::ONE;
     let mut l = Vec3::ZERO;
@@ -83,7 +124,7 @@ pub fn radiance_path_from<A: Accel>(
 
         // Next-event estimation.
         if !m.is_specular() && !s.lights.is_empty() {
-            l += beta * light_sample(s, &hit, wo, m, rng, c);
+            l += beta * light_sample(s, &hit, wo, m, true, rng, c);
         }
 
         // Continue by sampling the BSDF.
@@ -109,23 +150,4 @@ pub fn radiance_path_from<A: Accel>(
         }
     }
     l
-}
-
-/// One light sample at a non-delta vertex: `f Li |cos| / pdf`, MIS-weighted against the BSDF
-/// density for area lights.
-fn light_sample<A: Accel>(
-    s: &Shared<'_, A>,
-    hit: &SurfaceHit,
-    wo: Vec3,
-    m: &crate::material::Material,
-    rng: &mut Pcg32,
-    c: &mut Counters,
-) -> Vec3 {
-    let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) else { return Vec3::ZERO };
-    let f = m.eval(hit.n, wo, ls.wi);
-    if f == Vec3::ZERO || ls.li == Vec3::ZERO || !visible(s, hit, &ls, c) {
-        return Vec3::ZERO;
-    }
-    let w = if ls.delta { 1.0 } else { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) };
-    f * ls.li * (hit.n.dot(ls.wi).abs() * w / ls.pdf)
 }

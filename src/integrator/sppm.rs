@@ -1,5 +1,5 @@
 //! Stochastic progressive photon mapping (Hachisuka & Jensen 2009), on the same kd-tree photon
-//! maps as the two-pass method.
+//! maps and photon stages ([`super::maps`]) as the two-pass method.
 //!
 //! Every pass traces fresh photon maps (the indirect map and, when the scene has mirrors or
 //! glass, the aimed caustic map: together every photon path but the first hit, which direct
@@ -19,177 +19,146 @@
 //! are densest, so caustics start small), bounded by `--gather-radius`; it then shrinks so that
 //! bias and variance both go to zero as passes are added.
 
-use super::camera::{Scratch, SurfaceHit};
-use super::direct::direct_light;
-use super::{Counters, Progress, Shared};
-use crate::accel::{Accel, Hit};
+use super::maps::{Analysis, MapStages};
+use super::passes::{camera_stage, Pass, PassRenderer};
+use super::photon::GatherPair;
+use crate::accel::Accel;
+use crate::config::ProgressiveConfig;
 use crate::film::Film;
-use crate::geometry::Ray;
-use crate::material::{face_forward, Material};
-use crate::photon::trace::mix;
+use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
+use crate::frame::direct::direct_light;
+use crate::frame::specular::{walk, Landing, Start};
+use crate::frame::{Counters, Frame, Progress};
+use crate::material::face_forward;
+use crate::photon::kdtree::Neighbor;
+use crate::photon::map::PhotonMaps;
+use crate::stats::Stats;
 use glam::Vec3;
-use rand::{Rng, SeedableRng};
-use rand_pcg::Pcg32;
-use rayon::prelude::*;
 
-/// A pixel's progressive statistics.
+/// A pixel's progressive statistics (the emission and direct light, averaged over passes like
+/// any integrator's image, are not here).
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PixelState {
+struct PixelState {
     /// Squared gather radius (0 until the first visible point).
     r2: f32,
     /// Accumulated photon count `N`.
     n: f32,
     /// Accumulated flux `τ`, scaled to the current radius.
     tau: Vec3,
-    /// Sum over passes of the mean emission and direct light of the pass's samples.
-    ld: Vec3,
 }
 
-/// The first diffuse or glossy surface a camera sample reaches.
-struct Visible<'m> {
-    hit: SurfaceHit,
-    wo: Vec3,
-    m: &'m Material,
-    beta: Vec3,
+/// Progressive photon mapping over a render's passes.
+pub struct Progressive<'f, 'a, A: Accel> {
+    frame: &'f Frame<'a, A>,
+    cfg: &'f ProgressiveConfig,
+    analysis: Analysis,
+    gathers: GatherPair,
+    states: Vec<PixelState>,
 }
 
-/// One pass of the camera over every pixel, updating `states` (one per pixel, rows in
-/// parallel; each pixel's generator comes from (seed, pixel), so the result does not depend on
-/// the thread count).
-pub fn camera_pass<A: Accel>(
-    s: &Shared<'_, A>,
-    states: &mut [PixelState],
-    alpha: f32,
-    progress: &dyn Progress,
-) -> Counters {
-    let w = s.cfg.width as usize;
-    states
-        .par_chunks_mut(w)
-        .enumerate()
-        .map_init(
-            || {
-                crate::accel::init_tracing_thread();
-                Scratch::default()
-            },
-            |scratch, (y, row)| {
-                let mut c = Counters::default();
-                for (x, st) in row.iter_mut().enumerate() {
-                    let pixel = (y * w + x) as u64;
-                    let mut rng = Pcg32::seed_from_u64(mix(s.cfg.seed, 0xCA3E7A, pixel));
-                    update_pixel(s, x as u32, y as u32, st, alpha, &mut rng, scratch, &mut c);
-                }
-                progress.advance(1);
-                c
-            },
-        )
-        .reduce(Counters::default, |mut a, b| {
-            a += b;
-            a
+impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig) -> Self {
+        let pixels = frame.camera.width as usize * frame.camera.height as usize;
+        Progressive {
+            frame,
+            cfg,
+            analysis: Analysis::of(frame.scene, frame.lights),
+            gathers: GatherPair::new(&cfg.gathers, frame.scene),
+            states: vec![PixelState::default(); pixels],
+        }
+    }
+}
+
+impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
+    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+        let stages = MapStages {
+            passes: &self.cfg.maps,
+            indirect_unused: None,
+            caustic_unused: None,
+            site_stride: None,
+        };
+        let (maps, _) = stages.trace(self.frame, &self.analysis, pass.seed, stats, progress);
+        stats.skip("irradiance", "progressive photon mapping gathers at visible points");
+        let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
+        let why = "visible points, direct light and progressive radius updates";
+        let width = frame.camera.width as usize;
+        camera_stage(stats, progress, frame.camera.height, why, || {
+            for_each_pixel(
+                width,
+                &mut self.states,
+                pass.seed,
+                progress,
+                |x, y, st, rng, scratch: &mut Scratch, c| {
+                    frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
+                    let mut mean = SampleMean::default();
+                    let mut first = None;
+                    for (i, (ray, hit)) in scratch.batch.rays.iter().zip(&scratch.batch.hits).enumerate() {
+                        let (l, visible) = trace_camera(frame, cfg, *ray, *hit, rng, c);
+                        mean.add(l, c);
+                        if i == 0 {
+                            first = visible;
+                        }
+                    }
+                    if let Some(v) = first {
+                        gather(&maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, c);
+                    }
+                    mean.mean()
+                },
+            )
         })
+    }
+
+    /// After `passes` passes the pixel is `Ld / n + τ / (n π R²)`.
+    fn finish(&self, mean: Film, passes: u32) -> Film {
+        let mut film = mean;
+        let n = passes.max(1) as f32;
+        for (px, st) in film.pixels.iter_mut().zip(&self.states) {
+            if st.r2 > 0.0 {
+                *px += st.tau / (n * std::f32::consts::PI * st.r2);
+            }
+        }
+        film
+    }
 }
 
-/// The image after `passes` passes.
-pub fn film(states: &[PixelState], width: usize, height: usize, passes: u32) -> Film {
-    let mut film = Film::new(width, height);
-    let n = passes.max(1) as f32;
-    for (px, st) in film.pixels.iter_mut().zip(states) {
-        let mut l = st.ld / n;
-        if st.r2 > 0.0 {
-            l += st.tau / (n * std::f32::consts::PI * st.r2);
-        }
-        *px = l;
-    }
-    film
-}
-
-#[allow(clippy::too_many_arguments)]
-fn update_pixel<A: Accel>(
-    s: &Shared<'_, A>,
-    px: u32,
-    py: u32,
-    st: &mut PixelState,
-    alpha: f32,
-    rng: &mut Pcg32,
-    scratch: &mut Scratch,
-    c: &mut Counters,
-) {
-    let mut rays = std::mem::take(&mut scratch.rays);
-    let mut hits = std::mem::take(&mut scratch.hits);
-    s.camera_rays(px, py, &mut rays, &mut hits, c);
-    let (mut sum, mut good) = (Vec3::ZERO, 0u32);
-    let mut first = None;
-    for (i, (ray, hit)) in rays.iter().zip(&hits).enumerate() {
-        let (l, vis) = trace_camera(s, *ray, *hit, rng, c);
-        if l.is_finite() {
-            sum += l;
-            good += 1;
-        } else {
-            c.nonfinite += 1;
-        }
-        if i == 0 {
-            first = vis;
-        }
-    }
-    scratch.rays = rays;
-    scratch.hits = hits;
-    if good > 0 {
-        st.ld += sum / good as f32;
-    }
-    if let Some(v) = first {
-        gather(s, st, &v, alpha, scratch, c);
-    }
+/// Per-thread scratch buffers reused across pixels.
+#[derive(Default)]
+struct Scratch {
+    batch: CameraBatch,
+    neighbors: Vec<Neighbor>,
 }
 
 /// Follows a camera sample through mirrors and glass: returns the emission seen and the direct
-/// light at the first diffuse or glossy surface, and that surface.
+/// light at the first diffuse or glossy surface, and that surface (the visible point).
 fn trace_camera<'s, A: Accel>(
-    s: &'s Shared<'_, A>,
-    mut ray: Ray,
-    first: Option<Hit>,
-    rng: &mut Pcg32,
+    frame: &Frame<'s, A>,
+    cfg: &ProgressiveConfig,
+    ray: crate::geometry::Ray,
+    first: Option<crate::accel::Hit>,
+    rng: &mut rand_pcg::Pcg32,
     c: &mut Counters,
-) -> (Vec3, Option<Visible<'s>>) {
-    let mut beta = Vec3::ONE;
+) -> (Vec3, Option<Landing<'s>>) {
     let mut l = Vec3::ZERO;
-    for depth in 0..=s.cfg.max_depth {
-        let hit = if depth == 0 {
-            first.and_then(|h| s.surface(h))
-        } else {
-            c.rays.specular += 1;
-            s.trace(&ray)
-        };
-        let Some(hit) = hit else { break };
-        let m = s.scene.material(hit.prim);
-        let wo = -ray.dir.normalize();
-        l += beta * m.emitted(hit.n, wo);
-        if m.is_specular() {
-            if depth == s.cfg.max_depth {
-                break;
-            }
-            let Some(smp) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { break };
-            beta *= smp.weight(hit.n);
-            if beta.max_element() <= 0.0 {
-                break;
-            }
-            ray = Ray::new(hit.spawn(smp.wi), smp.wi);
-            continue;
-        }
-        l += beta * direct_light(s, &hit, wo, m, s.cfg.light_samples, rng, c);
-        return (l, Some(Visible { hit, wo, m, beta }));
+    let count = |c: &mut Counters| c.rays.specular += 1;
+    let landing = walk(frame, Start::Traced(ray, first), cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
+        l += beta * m.emitted(hit.n, wo)
+    });
+    if let Some(v) = &landing {
+        l += v.beta * direct_light(frame, &v.hit, v.wo, v.m, cfg.light_samples, rng, c);
     }
-    (l, None)
+    (l, landing)
 }
 
 /// The photons of this pass around the visible point: the progressive update of `st`.
-fn gather<A: Accel>(
-    s: &Shared<'_, A>,
+fn gather(
+    maps: &PhotonMaps,
+    gathers: &GatherPair,
     st: &mut PixelState,
-    v: &Visible<'_>,
+    v: &Landing<'_>,
     alpha: f32,
-    scratch: &mut Scratch,
+    nb: &mut Vec<Neighbor>,
     c: &mut Counters,
 ) {
-    let maps = s.maps;
     if maps.indirect.is_empty() && maps.caustic.is_empty() {
         return;
     }
@@ -197,8 +166,7 @@ fn gather<A: Accel>(
     let x = v.hit.p;
     if st.r2 == 0.0 {
         // The first radius: the k-th nearest photon in the map where they are densest.
-        let nb = &mut scratch.neighbors;
-        let kinds = [(&maps.indirect, &s.gather), (&maps.caustic, &s.caustic_gather)];
+        let kinds = [(&maps.indirect, &gathers.indirect), (&maps.caustic, &gathers.caustic)];
         st.r2 = f32::INFINITY;
         for (kind, params) in kinds {
             for map in kind.iter() {
@@ -215,7 +183,7 @@ fn gather<A: Accel>(
     let mut phi = Vec3::ZERO;
     let mut m = 0u32;
     for map in maps.indirect.iter().chain(&maps.caustic) {
-        m += map.for_each_within(x, ns, r, s.gather.flatten, |wi, power| {
+        m += map.for_each_within(x, ns, r, gathers.indirect.flatten, |wi, power| {
             phi += v.m.eval(v.hit.n, v.wo, wi) * power;
         });
     }

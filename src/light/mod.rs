@@ -12,11 +12,13 @@
 mod area;
 mod distant;
 mod point;
+mod set;
 mod spot;
 
 pub use area::{AreaLights, EmitterTriangle};
 pub use distant::DistantLight;
 pub use point::PointLight;
+pub use set::{Emission, Emitter, LightSet};
 pub use spot::SpotLight;
 
 use crate::geometry::{Aabb, TriangleMesh};

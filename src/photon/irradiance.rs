@@ -50,7 +50,7 @@ const NORMAL_COS: f32 = 0.9;
 
 /// Irradiance at photon positions, for fast diffuse lookups.
 #[derive(Debug, Default)]
-pub struct IrradianceCache {
+pub struct PrecomputedIrradiance {
     tree: KdTree<Site>,
     /// Largest distance at which a site is used.
     max_radius: f32,
@@ -77,7 +77,7 @@ pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<SitePoint> {
         .collect()
 }
 
-impl IrradianceCache {
+impl PrecomputedIrradiance {
     /// Estimates the irradiance at each site (in parallel) and indexes the sites: indirect and
     /// caustic from the maps, direct from `direct(site_index, site)`.
     pub fn build(
@@ -118,7 +118,7 @@ impl IrradianceCache {
                 caustic: pack::rgb9e5_encode(e.caustic / scale),
             })
             .collect();
-        IrradianceCache { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
+        PrecomputedIrradiance { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
     }
 
     pub fn len(&self) -> usize {
@@ -212,7 +212,9 @@ mod tests {
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
         let cache =
-            IrradianceCache::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| Vec3::X);
+            PrecomputedIrradiance::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
+                Vec3::X
+            });
         let mut scratch = Vec::new();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
         let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");

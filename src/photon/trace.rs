@@ -25,10 +25,11 @@
 use super::map::PhotonHit;
 use crate::accel::Accel;
 use crate::config::ColorMode;
+use crate::frame::Progress;
 use crate::geometry::{offset_ray_origin, Ray};
-use crate::integrator::lights::{Emitter, LightSet};
-use crate::integrator::Progress;
+use crate::light::{Emitter, LightSet};
 use crate::material::{face_forward, LobeKind};
+use crate::sampling::derive_seed;
 use crate::scene::Scene;
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
@@ -208,7 +209,7 @@ pub fn trace_pass<A: Accel>(
 ) -> PassOutput {
     let PassSpec { pass, n, color, max_bounces, targets, aim, seed } = *spec;
     let emitters = lights.emitters();
-    let mut alloc_rng = Pcg32::seed_from_u64(mix(seed, pass as u64, u64::MAX));
+    let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, u64::MAX));
     let (jobs, emitted) = allocate(emitters, n, color, &mut alloc_rng);
     // Fixed chunks over the concatenated jobs.
     let mut chunks: Vec<(usize, u64, u64)> = Vec::new();
@@ -226,7 +227,7 @@ pub fn trace_pass<A: Accel>(
         .enumerate()
         .map(|(ci, &(j, start, end))| {
             let job = &jobs[j];
-            let mut rng = Pcg32::seed_from_u64(mix(seed, pass as u64, ci as u64));
+            let mut rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, ci as u64));
             let mut out = vec![Vec::new(); n_maps];
             let (mut rays, mut paths) = (0u64, 0u64);
             let e = &emitters[job.emitter];
@@ -334,17 +335,6 @@ fn stratum(i: u64, n: u64, rng: &mut Pcg32) -> [f32; 2] {
     .map(|u: f32| u.min(1.0 - f32::EPSILON / 2.0))
 }
 
-/// A well-mixed 64-bit seed from three values (SplitMix64 finaliser).
-pub fn mix(a: u64, b: u64, c: u64) -> u64 {
-    let mut z = a ^ b.rotate_left(21) ^ c.rotate_left(42) ^ 0x9E37_79B9_7F4A_7C15;
-    for _ in 0..2 {
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-    }
-    z
-}
-
 /// Fraction of emission samples that meet a specular target, estimated from `tries` samples
 /// split among emitters by power (the same split as the pass). Used to turn a caustic photon
 /// budget into a number of tries.
@@ -353,7 +343,7 @@ pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed
         return 0.0;
     }
     let emitters = lights.emitters();
-    let mut rng = Pcg32::seed_from_u64(mix(seed, 7, 7));
+    let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 7, 7));
     let (jobs, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
     let (mut accepted, mut total) = (0u64, 0u64);
     for job in &jobs {

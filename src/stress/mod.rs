@@ -20,7 +20,8 @@ pub mod scenes;
 
 use crate::accel::{AccelError, AccelKind, AccelOptions};
 use crate::config::{ConfigError, RenderSettings};
-use crate::integrator::{render_scene, Quiet, RenderOutput};
+use crate::frame::Quiet;
+use crate::integrator::{render_scene, RenderOutput};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::time::Instant;

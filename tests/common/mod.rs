@@ -2,7 +2,8 @@
 
 use photonmap::config::RenderSettings;
 use photonmap::film::Film;
-use photonmap::integrator::{render_scene, Quiet, RenderOutput};
+use photonmap::frame::Quiet;
+use photonmap::integrator::{render_scene, RenderOutput};
 use photonmap::scene::Scene;
 use std::path::Path;
 

@@ -1,10 +1,12 @@
-//! The scene's lights as the integrator sees them: one distribution to pick a light for a
-//! shadow ray (by power), and a flat list of photon emitters where every emissive triangle is an
+//! The scene's lights as the renderer sees them: one distribution to pick a light for a shadow
+//! ray (by power), and a flat list of photon emitters where every emissive triangle is an
 //! emitter of its own (so the photon pass can stratify over each).
 
-use crate::light::{build_lights, power_distribution, Light, LightSample};
+use super::LightDesc;
+use super::{build_lights, power_distribution, Light, LightSample};
+use crate::geometry::TriangleMesh;
+use crate::material::Material;
 use crate::sampling::Distribution1D;
-use crate::scene::Scene;
 use glam::Vec3;
 
 /// A photon source: a light, or one triangle of the area lights.
@@ -33,8 +35,14 @@ pub struct LightSet {
 }
 
 impl LightSet {
-    pub fn new(scene: &Scene) -> Self {
-        let lights = build_lights(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials);
+    /// The lights of `descs` and the emissive triangles of `mesh` (see [`build_lights`]).
+    pub fn new(
+        descs: &[LightDesc],
+        mesh: &TriangleMesh,
+        tri_material: &[u32],
+        materials: &[Material],
+    ) -> Self {
+        let lights = build_lights(descs, mesh, tri_material, materials);
         let select = power_distribution(&lights);
         let mut emitters = Vec::new();
         let mut area = None;

@@ -1,11 +1,132 @@
-//! Passes: the image rendered again with fresh random numbers and averaged (or, with
-//! progressive photon mapping, refined), until a pass count, a time budget or a request to
-//! stop (Ctrl-C) ends it, with the image so far handed out every few passes.
+//! Passes, for every integrator alike: the image rendered again with fresh random numbers and
+//! averaged (progressive photon mapping also refines its radii), until a pass count, a time
+//! budget or a request to stop (Ctrl-C) ends it, with the image so far handed out every few
+//! passes. [`run`] is the loop; an integrator only says what one pass does ([`PassRenderer`]).
 
 use crate::config::RenderConfig;
 use crate::film::Film;
+use crate::frame::camera::PixelSamples;
+use crate::frame::{Counters, Progress, Quiet};
+use crate::sampling::derive_seed;
+use crate::stats::Stats;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
+
+/// One pass of a render, as an integrator sees it.
+#[derive(Clone, Copy, Debug)]
+pub struct Pass {
+    /// Passes finished before this one.
+    pub index: u32,
+    /// This pass's seed: the render's own for the first pass, so that one pass gives the same
+    /// image as a render without passes.
+    pub seed: u64,
+    /// The camera samples of this pass.
+    pub samples: PixelSamples,
+}
+
+/// What an integrator does in each pass.
+pub trait PassRenderer {
+    /// Renders `pass` (its photon stages, if any, then its camera stage, each recorded in
+    /// `stats`): the pass's image, which [`run`] averages over passes, and its counters.
+    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters);
+
+    /// The image after `passes` passes, given the mean of their images (progressive photon
+    /// mapping adds its photon term here).
+    fn finish(&self, mean: Film, _passes: u32) -> Film {
+        mean
+    }
+}
+
+/// Renders passes with `integrator` until `cfg` and `control` say to stop; returns the image
+/// and the counters of every pass. Records the passes done and whether a stop request ended
+/// the render in `stats`.
+pub fn run(
+    cfg: &RenderConfig,
+    control: Control<'_>,
+    progress: &dyn Progress,
+    stats: &mut Stats,
+    integrator: &mut impl PassRenderer,
+) -> (Film, Counters) {
+    let mut schedule = Schedule::new(cfg, control);
+    let progressive = schedule.is_progressive();
+    // In a progressive render one bar counts the passes; the stages of each pass stay quiet.
+    let inner: &dyn Progress = if progressive { &Quiet } else { progress };
+    let mut sum = FilmSum::new(cfg.width as usize, cfg.height as usize);
+    let mut counters = Counters::default();
+    if progressive {
+        progress.start("passes", schedule.progress_total());
+    }
+    while schedule.start_pass() {
+        let index = schedule.done();
+        let samples = PixelSamples { spp: cfg.spp, first: index as u64 * cfg.spp as u64, seed: cfg.seed };
+        let pass = Pass { index, seed: pass_seed(cfg.seed, index), samples };
+        let (film, c) = integrator.render_pass(&pass, stats, inner);
+        sum.add(&film);
+        counters += c;
+        let (units, due) = schedule.finish_pass();
+        progress.advance(if progressive { units } else { 0 });
+        if due {
+            schedule.checkpoint(&integrator.finish(sum.mean(schedule.done()), schedule.done()));
+        }
+    }
+    if progressive {
+        progress.finish();
+    }
+    stats.passes = schedule.done();
+    stats.cancelled = schedule.cancelled();
+    (integrator.finish(sum.mean(schedule.done()), schedule.done()), counters)
+}
+
+/// The camera stage of a pass: `f` under the stage name `camera` in `stats`, with a progress
+/// bar counting `rows`.
+pub fn camera_stage<R>(
+    stats: &mut Stats,
+    progress: &dyn Progress,
+    rows: u32,
+    reason: &str,
+    f: impl FnOnce() -> R,
+) -> R {
+    progress.start("camera", rows as u64);
+    let out = stats.run("camera", reason, |_| f());
+    progress.finish();
+    out
+}
+
+/// The seed of pass `pass`.
+fn pass_seed(seed: u64, pass: u32) -> u64 {
+    if pass == 0 {
+        seed
+    } else {
+        derive_seed(seed, 0x9A55E5, pass as u64)
+    }
+}
+
+/// The sum of the passes' images.
+struct FilmSum {
+    sum: Film,
+}
+
+impl FilmSum {
+    fn new(width: usize, height: usize) -> Self {
+        FilmSum { sum: Film::new(width, height) }
+    }
+
+    fn add(&mut self, film: &Film) {
+        for (s, p) in self.sum.pixels.iter_mut().zip(&film.pixels) {
+            *s += *p;
+        }
+    }
+
+    /// The mean image of `passes` passes.
+    fn mean(&self, passes: u32) -> Film {
+        let mut film = self.sum.clone();
+        let n = passes.max(1) as f32;
+        for p in &mut film.pixels {
+            *p /= n;
+        }
+        film
+    }
+}
 
 /// Called with the number of passes done and the image so far.
 pub type Checkpoint<'a> = &'a (dyn Fn(u32, &Film) + Sync);
@@ -35,7 +156,7 @@ impl Control<'_> {
 }
 
 /// Decides whether another pass starts.
-pub struct Schedule<'a> {
+struct Schedule<'a> {
     passes: Option<u32>,
     time: Option<f64>,
     control: Control<'a>,

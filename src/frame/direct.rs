@@ -5,8 +5,7 @@
 //! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
 //! the two everywhere.
 
-use super::camera::SurfaceHit;
-use super::{Counters, Shared};
+use super::{Counters, Frame, SurfaceHit};
 use crate::accel::Accel;
 use crate::geometry::Ray;
 use crate::light::LightSample;
@@ -26,7 +25,7 @@ pub const SHADOW_MARGIN: f32 = 1e-4;
 /// [`SHADOW_MARGIN`]. A light point within rounding distance is visible: nothing between the
 /// two can be resolved.
 #[inline]
-pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, ls: &LightSample, c: &mut Counters) -> bool {
+pub fn visible<A: Accel>(s: &Frame<'_, A>, hit: &SurfaceHit, ls: &LightSample, c: &mut Counters) -> bool {
     c.rays.shadow += 1;
     let origin = hit.spawn(ls.wi);
     let t_max = if ls.dist.is_finite() {
@@ -37,10 +36,33 @@ pub fn visible<A: Accel>(s: &Shared<'_, A>, hit: &SurfaceHit, ls: &LightSample, 
     !s.accel.occluded(&Ray::segment(origin, ls.wi, 0.0, t_max))
 }
 
-/// Direct radiance reflected toward `wo` at `hit`, averaged over `n` light samples (plus, for
-/// glossy surfaces, BSDF samples weighted by MIS).
+/// One light sample at `hit`: a light picked by power, a point on it, and if the shadow ray
+/// finds it unblocked `f Li |cos| / pdf`, MIS-weighted against the BSDF density when the light
+/// is not a delta light (`mis`: whether BSDF samples can find emitters at all).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn light_sample<A: Accel>(
+    s: &Frame<'_, A>,
+    hit: &SurfaceHit,
+    wo: Vec3,
+    m: &Material,
+    mis: bool,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> Vec3 {
+    let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) else { return Vec3::ZERO };
+    let f = m.eval(hit.n, wo, ls.wi);
+    if f == Vec3::ZERO || ls.li == Vec3::ZERO || !visible(s, hit, &ls, c) {
+        return Vec3::ZERO;
+    }
+    let w = if mis && !ls.delta { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) } else { 1.0 };
+    f * ls.li * (hit.n.dot(ls.wi).abs() * w / ls.pdf)
+}
+
+/// Direct radiance reflected toward `wo` at `hit`, averaged over `n` light samples (plus, when
+/// the scene has area lights, as many BSDF samples, the two weighted by MIS).
 pub fn direct_light<A: Accel>(
-    s: &Shared<'_, A>,
+    s: &Frame<'_, A>,
     hit: &SurfaceHit,
     wo: Vec3,
     m: &Material,
@@ -54,19 +76,7 @@ pub fn direct_light<A: Accel>(
     let mis = s.lights.has_area();
     let mut sum = Vec3::ZERO;
     for _ in 0..n {
-        // Light sampling.
-        if let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) {
-            let f = m.eval(hit.n, wo, ls.wi);
-            if f != Vec3::ZERO && ls.pdf > 0.0 && visible(s, hit, &ls, c) {
-                let cos = hit.n.dot(ls.wi).abs();
-                let w = if mis && !ls.delta {
-                    power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi))
-                } else {
-                    1.0
-                };
-                sum += f * ls.li * (cos * w / ls.pdf);
-            }
-        }
+        sum += light_sample(s, hit, wo, m, mis, rng, c);
         // BSDF sampling toward area lights.
         if mis {
             let Some(bs) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };

@@ -1,0 +1,78 @@
+//! The walk through mirrors and glass that camera rays and final-gather rays take: from a ray
+//! (or a primary ray's known hit), specular bounces are sampled until the first diffuse or
+//! glossy surface, which is where photon maps, shadow rays and gathers take over.
+
+use super::{Counters, Frame, SurfaceHit};
+use crate::accel::{Accel, Hit};
+use crate::geometry::Ray;
+use crate::material::Material;
+use glam::Vec3;
+use rand::Rng;
+use rand_pcg::Pcg32;
+
+/// The first diffuse or glossy surface a walk reaches.
+#[derive(Clone, Copy, Debug)]
+pub struct Landing<'m> {
+    pub hit: SurfaceHit,
+    /// Unit direction back along the ray that arrived.
+    pub wo: Vec3,
+    pub m: &'m Material,
+    /// Throughput of the specular bounces behind it.
+    pub beta: Vec3,
+}
+
+/// Where a walk starts.
+#[derive(Clone, Copy, Debug)]
+pub enum Start {
+    /// A primary ray whose closest hit (or miss) is already known.
+    Traced(Ray, Option<Hit>),
+    /// A ray still to be traced.
+    Ray(Ray),
+}
+
+/// Follows `start` through at most `max_depth` specular bounces. `visit(hit, wo, material,
+/// beta)` sees every surface reached, the landing included (camera paths add the emission seen
+/// there); `count` counts each ray traced here. Returns the landing, or `None` if the walk
+/// leaves the scene, is absorbed, or runs out of depth.
+#[allow(clippy::too_many_arguments)]
+pub fn walk<'s, A: Accel>(
+    frame: &Frame<'s, A>,
+    start: Start,
+    max_depth: u32,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+    count: fn(&mut Counters),
+    mut visit: impl FnMut(&SurfaceHit, Vec3, &Material, Vec3),
+) -> Option<Landing<'s>> {
+    let (mut ray, mut first) = match start {
+        Start::Traced(ray, hit) => (ray, Some(hit)),
+        Start::Ray(ray) => (ray, None),
+    };
+    let mut beta = Vec3::ONE;
+    for depth in 0..=max_depth {
+        let hit = match first.take() {
+            Some(hit) => hit.and_then(|h| frame.surface(h)),
+            None => {
+                count(c);
+                frame.trace(&ray)
+            }
+        };
+        let hit = hit?;
+        let m = frame.scene.material(hit.prim);
+        let wo = -ray.dir.normalize();
+        visit(&hit, wo, m, beta);
+        if !m.is_specular() {
+            return Some(Landing { hit, wo, m, beta });
+        }
+        if depth == max_depth {
+            return None;
+        }
+        let s = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()])?;
+        beta *= s.weight(hit.n);
+        if beta.max_element() <= 0.0 {
+            return None;
+        }
+        ray = Ray::new(hit.spawn(s.wi), s.wi);
+    }
+    None
+}

@@ -1,0 +1,245 @@
+//! The photon stages of a pass, shared by two-pass and progressive photon mapping: the scene
+//! analysis that decides which maps are needed, the indirect and caustic photon passes, and the
+//! balancing of the maps, each stage recorded in the stats with why it ran or why not.
+
+use crate::accel::Accel;
+use crate::config::{CausticPass, ColorMode, PhotonPasses};
+use crate::frame::{Frame, Progress};
+use crate::light::LightSet;
+use crate::photon::irradiance::{self, SitePoint};
+use crate::photon::map::{MapColor, PhotonMap, PhotonMaps};
+use crate::photon::trace::{self, Pass, PassSpec};
+use crate::scene::Scene;
+use crate::stats::Stats;
+use glam::Vec3;
+
+/// What the scene needs, decided before any work.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// Some triangle is a mirror or glass.
+    pub has_specular: bool,
+    /// Some triangle is diffuse or glossy (stores photons, gathers light).
+    pub has_diffuse: bool,
+    pub light_power: Vec3,
+}
+
+impl Analysis {
+    pub fn of(scene: &Scene, lights: &LightSet) -> Self {
+        let mut used = vec![false; scene.materials.len()];
+        for &m in &scene.tri_material {
+            used[m as usize] = true;
+        }
+        let any = |f: fn(&crate::material::Material) -> bool| {
+            scene.materials.iter().zip(&used).any(|(m, &u)| u && f(m))
+        };
+        Analysis {
+            has_specular: any(|m| m.is_specular()),
+            has_diffuse: any(|m| m.is_diffuse_like()),
+            light_power: lights.total_power(),
+        }
+    }
+
+    /// Whether any light has power.
+    pub fn has_light(&self) -> bool {
+        self.light_power.max_element() > 0.0
+    }
+}
+
+/// Which maps an integrator reads, and how they are traced.
+#[derive(Clone, Copy, Debug)]
+pub struct MapStages<'a> {
+    pub passes: &'a PhotonPasses,
+    /// Why the image does not need the indirect map, if it does not (a `--component` choice).
+    pub indirect_unused: Option<&'static str>,
+    /// Why the image does not need the caustic map, if it does not.
+    pub caustic_unused: Option<&'static str>,
+    /// Pick every this-many-th indirect photon as a site of precomputed irradiance (`None`:
+    /// no sites).
+    pub site_stride: Option<usize>,
+}
+
+impl MapStages<'_> {
+    /// Traces and balances the maps of the pass seeded `seed` (empty maps dropped), and picks
+    /// the photon positions for precomputed irradiance.
+    pub fn trace<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        analysis: &Analysis,
+        seed: u64,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PhotonMaps, Vec<SitePoint>) {
+        let (indirect, sites) = self.indirect(frame, analysis, seed, stats, progress);
+        let caustic = self.caustic(frame, analysis, seed, stats, progress);
+        (PhotonMaps { indirect, caustic }, sites)
+    }
+
+    fn indirect<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        analysis: &Analysis,
+        seed: u64,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (Vec<PhotonMap>, Vec<SitePoint>) {
+        let p = self.passes;
+        let why_not = if !analysis.has_light() {
+            Some("no light has power")
+        } else if !analysis.has_diffuse {
+            Some("nothing diffuse or glossy: no surface stores photons")
+        } else if p.photons == 0 {
+            Some("photon budget is 0")
+        } else {
+            self.indirect_unused
+        };
+        if let Some(why) = why_not {
+            stats.skip("photons.indirect", why);
+            return (Vec::new(), Vec::new());
+        }
+        progress.start("indirect photons", p.photons);
+        let out = stats.run("photons.indirect", "diffuse surfaces and lit scene", |_| {
+            let spec = PassSpec {
+                pass: Pass::Indirect,
+                n: p.photons,
+                color: p.color,
+                max_bounces: p.max_bounces,
+                targets: &[],
+                aim: false,
+                seed,
+            };
+            trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
+        });
+        progress.finish();
+        stats.rays.photon += out.rays;
+        // The same density of sites whatever the colour mode: per-channel maps split the photons
+        // three ways, so each contributes a third as many sites.
+        let sites = match self.site_stride {
+            Some(stride) => irradiance::pick_sites(&out.maps, stride * out.maps.len()),
+            None => Vec::new(),
+        };
+        let maps = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, p.color));
+        record_maps(stats, "indirect", &maps);
+        (drop_empty(stats, "indirect", maps), sites)
+    }
+
+    /// Why the caustic pass does not run, if it does not: the scene analysis, overridden by
+    /// `--caustic-pass on|off`.
+    fn caustic_skip_reason(&self, analysis: &Analysis) -> Option<&'static str> {
+        let p = self.passes;
+        if p.caustic_photons == 0 {
+            Some("caustic photon budget is 0")
+        } else if p.caustic_pass == CausticPass::On {
+            None
+        } else if p.caustic_pass == CausticPass::Off {
+            Some("off (--caustic-pass off)")
+        } else if !analysis.has_specular {
+            Some("no specular (mirror or glass) material")
+        } else if !analysis.has_diffuse {
+            Some("nothing diffuse or glossy to receive caustics")
+        } else if !analysis.has_light() {
+            Some("no light has power")
+        } else {
+            self.caustic_unused
+        }
+    }
+
+    /// The caustic map: photons aimed at the specular objects (or, with `--caustic-aim false`
+    /// or nothing to aim at, emitted as usual) that reach a diffuse surface through mirrors and
+    /// glass only.
+    fn caustic<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        analysis: &Analysis,
+        seed: u64,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> Vec<PhotonMap> {
+        let p = self.passes;
+        if let Some(why) = self.caustic_skip_reason(analysis) {
+            stats.skip("photons.caustic", why);
+            return Vec::new();
+        }
+        let forced = if p.caustic_pass == CausticPass::On { " (--caustic-pass on)" } else { "" };
+        let targets = if p.caustic_aim { trace::specular_targets(frame.scene) } else { Vec::new() };
+        let acceptance = if targets.is_empty() {
+            0.0
+        } else {
+            trace::target_acceptance(frame.lights, &targets, 1 << 16, seed)
+        };
+        let aim = acceptance > 0.0;
+        let (tries, reason) = if aim {
+            // Tries such that about `caustic_photons` photons are aimed at the targets.
+            let tries = ((p.caustic_photons as f64 / acceptance).ceil() as u64)
+                .min(p.caustic_photons.saturating_mul(1000));
+            let reason = format!(
+                "{} specular targets, {:.2}% of emission aimed at them{forced}",
+                targets.len(),
+                100.0 * acceptance
+            );
+            (tries, reason)
+        } else if p.caustic_aim && p.caustic_pass != CausticPass::On {
+            stats.skip("photons.caustic", "no emitted photon is aimed at a specular object");
+            return Vec::new();
+        } else {
+            let why = if p.caustic_aim { "nothing to aim at" } else { "aiming off (--caustic-aim false)" };
+            let reason = format!("{why}: photons emitted from the lights, specular paths kept{forced}");
+            (p.caustic_photons, reason)
+        };
+        progress.start("caustic photons", tries);
+        let out = stats.run("photons.caustic", reason, |_| {
+            let spec = PassSpec {
+                pass: Pass::Caustic,
+                n: tries,
+                color: p.color,
+                max_bounces: p.max_bounces,
+                targets: &targets,
+                aim,
+                seed: seed ^ 0x5EED,
+            };
+            trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
+        });
+        progress.finish();
+        stats.rays.photon += out.rays;
+        let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
+        record_maps(stats, "caustic", &maps);
+        drop_empty(stats, "caustic", maps)
+    }
+}
+
+/// Packs and balances the maps of one pass.
+fn build_maps(out: trace::PassOutput, color: ColorMode) -> Vec<PhotonMap> {
+    out.maps
+        .into_iter()
+        .zip(out.emitted)
+        .enumerate()
+        .map(|(i, (hits, emitted))| {
+            let c = match color {
+                ColorMode::Rgb => MapColor::Rgb,
+                ColorMode::PerChannel => MapColor::Channel(i),
+            };
+            PhotonMap::build(hits, c, emitted)
+        })
+        .collect()
+}
+
+/// `maps` without its empty maps (an empty map is never queried); when none is left, the
+/// lookups of `kind` are recorded as skipped.
+fn drop_empty(stats: &mut Stats, kind: &str, mut maps: Vec<PhotonMap>) -> Vec<PhotonMap> {
+    maps.retain(|m| !m.is_empty());
+    if maps.is_empty() {
+        stats.skip(&format!("lookups.{kind}"), format!("the {kind} map is empty: no photon was stored"));
+    }
+    maps
+}
+
+fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
+    let names = ["r", "g", "b"];
+    for (i, m) in maps.iter().enumerate() {
+        let name = if maps.len() == 1 { kind.to_string() } else { format!("{kind}.{}", names[i]) };
+        // Over passes: photons add up; memory is that of the largest map held at once.
+        let e = stats.photons.entry(name).or_default();
+        e.emitted += m.emitted;
+        e.stored += m.len() as u64;
+        e.bytes = e.bytes.max(m.bytes() as u64);
+    }
+}

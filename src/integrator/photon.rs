@@ -1,0 +1,341 @@
+//! Two-pass photon mapping (Jensen 1996, 2001), the renderer proper. Each pass traces the
+//! photon maps ([`super::maps`]), precomputes irradiance at a subset of the indirect photons
+//! (Christensen 1999), then renders every pixel: primary rays through mirrors and glass, and at
+//! the first diffuse or glossy surface the sum the lecture prescribes: direct light by shadow
+//! rays, caustics from the caustic map, indirect light from the indirect map (radiance
+//! estimate) or by final gathering.
+
+use super::maps::{Analysis, MapStages};
+use super::passes::{camera_stage, Pass, PassRenderer};
+use crate::accel::Accel;
+use crate::config::{Component, IndirectMode, PhotonConfig};
+use crate::film::Film;
+use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
+use crate::frame::direct::direct_light;
+use crate::frame::specular::{walk, Start};
+use crate::frame::{Counters, Frame, Progress, SurfaceHit};
+use crate::geometry::Ray;
+use crate::material::{face_forward, Material};
+use crate::photon::irradiance::{Irradiance, PrecomputedIrradiance, SitePoint};
+use crate::photon::kdtree::Neighbor;
+use crate::photon::map::{GatherParams, PhotonMaps};
+use crate::sampling::derive_seed;
+use crate::stats::{MapStats, Stats};
+use glam::Vec3;
+use rand::{Rng, SeedableRng};
+use rand_pcg::Pcg32;
+
+/// Irradiance is precomputed at every this-many-th indirect photon (Christensen uses 4).
+const IRRADIANCE_STRIDE: usize = 4;
+
+/// Shadow-ray samples for the direct irradiance of each precomputed site.
+const SITE_LIGHT_SAMPLES: u32 = 16;
+
+/// The gathers of a photon-mapping render, with radii resolved for the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct GatherPair {
+    pub indirect: GatherParams,
+    pub caustic: GatherParams,
+}
+
+impl GatherPair {
+    /// `gathers` with the default radii of `scene`: a tenth of its bounding sphere's radius for
+    /// indirect light, a quarter of that for caustics.
+    pub fn new(gathers: &crate::config::Gathers, scene: &crate::scene::Scene) -> Self {
+        let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
+        let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
+            k: k as usize,
+            max_radius: radius.unwrap_or(default),
+            kernel: gathers.kernel,
+            flatten: 8.0,
+        };
+        GatherPair {
+            indirect: params(gathers.gather_photons, gathers.gather_radius, auto_radius),
+            caustic: params(
+                gathers.caustic_gather_photons,
+                gathers.caustic_gather_radius,
+                0.25 * auto_radius,
+            ),
+        }
+    }
+}
+
+/// The two-pass photon mapper over a render's passes.
+pub struct PhotonMapper<'f, 'a, A: Accel> {
+    frame: &'f Frame<'a, A>,
+    cfg: &'f PhotonConfig,
+    analysis: Analysis,
+    gathers: GatherPair,
+}
+
+impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f PhotonConfig) -> Self {
+        let analysis = Analysis::of(frame.scene, frame.lights);
+        PhotonMapper { frame, cfg, analysis, gathers: GatherPair::new(&cfg.gathers, frame.scene) }
+    }
+
+    fn stages(&self) -> MapStages<'f> {
+        let cfg = self.cfg;
+        // Camera hits read the caustic map for the caustic term, final-gather hits for the
+        // indirect one.
+        let caustics_shown = match cfg.component {
+            Component::All | Component::Caustic => true,
+            Component::Indirect => cfg.indirect == IndirectMode::FinalGather,
+            Component::Emitted | Component::Direct => false,
+        };
+        MapStages {
+            passes: &cfg.maps,
+            indirect_unused: (!cfg.component.shows(Component::Indirect))
+                .then_some("the render does not show indirect light (--component)"),
+            caustic_unused: (!caustics_shown).then_some("the render does not show caustics (--component)"),
+            site_stride: cfg.irradiance_cache.then_some(IRRADIANCE_STRIDE),
+        }
+    }
+
+    /// Precomputed irradiance at `sites` (empty when there are none).
+    fn precompute(
+        &self,
+        stats: &mut Stats,
+        maps: &PhotonMaps,
+        sites: Vec<SitePoint>,
+        seed: u64,
+    ) -> PrecomputedIrradiance {
+        if sites.is_empty() {
+            let why = if self.cfg.irradiance_cache {
+                "no indirect photons"
+            } else {
+                "disabled (--irradiance-cache false)"
+            };
+            stats.skip("irradiance", why);
+            return PrecomputedIrradiance::default();
+        }
+        let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
+        let g = &self.gathers;
+        let irradiance = stats.run("irradiance", reason, |_| {
+            if self.cfg.indirect != IndirectMode::FinalGather {
+                // Only final gathering reads the direct part.
+                // Nor the caustic part: camera hits read the caustic map itself.
+                return PrecomputedIrradiance::build(
+                    sites,
+                    &maps.indirect,
+                    &[],
+                    &g.indirect,
+                    &g.caustic,
+                    |_, _| Vec3::ZERO,
+                );
+            }
+            // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
+            // light and cosine sampling), times pi.
+            let white = Material::Diffuse { kd: Vec3::ONE };
+            let direct = |i: usize, site: &SitePoint| {
+                let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0xD12EC7, i as u64));
+                let mut c = Counters::default();
+                let hit = SurfaceHit { p: site.pos, err: site.err, n: site.n, prim: 0, t: 0.0 };
+                let l = direct_light(self.frame, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
+                std::f32::consts::PI * l
+            };
+            PrecomputedIrradiance::build(
+                sites,
+                &maps.indirect,
+                &maps.caustic,
+                &g.indirect,
+                &g.caustic,
+                direct,
+            )
+        });
+        let bytes = irradiance.bytes() as u64;
+        let record = MapStats { emitted: 0, stored: irradiance.len() as u64, bytes };
+        stats.photons.insert("irradiance_cache".into(), record);
+        irradiance
+    }
+}
+
+impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
+    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+        let (maps, sites) = self.stages().trace(self.frame, &self.analysis, pass.seed, stats, progress);
+        let irradiance = self.precompute(stats, &maps, sites, pass.seed);
+        let shading = Shading {
+            frame: self.frame,
+            cfg: self.cfg,
+            maps: &maps,
+            irradiance: &irradiance,
+            gathers: self.gathers,
+        };
+        let camera = &self.frame.camera;
+        let mut pixels = vec![(); camera.width as usize * camera.height as usize];
+        camera_stage(stats, progress, camera.height, "always", || {
+            for_each_pixel(
+                camera.width as usize,
+                &mut pixels,
+                pass.seed,
+                progress,
+                |x, y, _, rng, scratch: &mut Scratch, c| {
+                    self.frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
+                    let batch = std::mem::take(&mut scratch.batch);
+                    let mut mean = SampleMean::default();
+                    for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
+                        mean.add(shading.radiance(*ray, *hit, rng, scratch, c), c);
+                    }
+                    scratch.batch = batch;
+                    mean.mean()
+                },
+            )
+        })
+    }
+}
+
+/// Per-thread scratch buffers reused across pixels.
+#[derive(Default)]
+struct Scratch {
+    batch: CameraBatch,
+    neighbors: Vec<Neighbor>,
+}
+
+/// What the camera pass of one pass reads.
+struct Shading<'s, 'a, A: Accel> {
+    frame: &'s Frame<'a, A>,
+    cfg: &'s PhotonConfig,
+    maps: &'s PhotonMaps,
+    /// Precomputed irradiance (empty when disabled or when there is no indirect map).
+    irradiance: &'s PrecomputedIrradiance,
+    gathers: GatherPair,
+}
+
+impl<A: Accel> Shading<'_, '_, A> {
+    /// Radiance arriving along a camera ray whose first hit `first` is already known:
+    /// emission seen directly or through mirrors and glass (direct light at diffuse surfaces
+    /// comes from shadow rays instead), then the shading of the first diffuse or glossy
+    /// surface.
+    fn radiance(
+        &self,
+        ray: Ray,
+        first: Option<crate::accel::Hit>,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let emitted = self.cfg.component.shows(Component::Emitted);
+        let mut l = Vec3::ZERO;
+        let start = Start::Traced(ray, first);
+        let count = |c: &mut Counters| c.rays.specular += 1;
+        let landing = walk(self.frame, start, self.cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
+            if emitted {
+                l += beta * m.emitted(hit.n, wo);
+            }
+        });
+        if let Some(v) = landing {
+            l += v.beta * self.shade(&v.hit, v.wo, v.m, rng, scratch, c);
+        }
+        l
+    }
+
+    /// Reflected radiance toward `wo` at a diffuse or glossy surface.
+    fn shade(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let only = self.cfg.component;
+        let mut l = Vec3::ZERO;
+        if only.shows(Component::Direct) {
+            l += direct_light(self.frame, hit, wo, m, self.cfg.light_samples, rng, c);
+        }
+        if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
+            c.queries += self.maps.caustic.len() as u64;
+            let (maps, g) = (&self.maps.caustic, &self.gathers.caustic);
+            l += PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, &mut scratch.neighbors);
+        }
+        if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
+            l += match self.cfg.indirect {
+                IndirectMode::Estimate => match self.precomputed(hit, wo, m, scratch, c) {
+                    Some(e) => e.indirect,
+                    None => {
+                        c.queries += self.maps.indirect.len() as u64;
+                        let (maps, g) = (&self.maps.indirect, &self.gathers.indirect);
+                        PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, &mut scratch.neighbors)
+                    }
+                },
+                IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
+            };
+        }
+        l
+    }
+
+    /// Reflected radiance at a Lambertian surface from the precomputed irradiance, by kind of
+    /// path, or `None` (not Lambertian, nothing precomputed, or no site near enough).
+    #[inline]
+    fn precomputed(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Option<Irradiance> {
+        let kd = m.lambertian()?;
+        if self.irradiance.is_empty() {
+            return None;
+        }
+        c.queries += 1;
+        let e = self.irradiance.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.neighbors)?;
+        let f = kd * std::f32::consts::FRAC_1_PI;
+        Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
+    }
+
+    /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
+    /// diffuse or glossy surface (after any mirrors and glass), the radiance leaving it toward
+    /// the gather point: on Lambertian surfaces from the precomputed direct, indirect and caustic
+    /// irradiance (one lookup, no shadow ray), elsewhere from one shadow ray plus the maps'
+    /// estimates. Emission is not counted there: it is direct light at the gather point,
+    /// already sampled.
+    fn final_gather(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let n_rays = self.cfg.final_gather_rays;
+        let mut sum = Vec3::ZERO;
+        for _ in 0..n_rays {
+            let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
+            let mut beta = s.weight(hit.n);
+            let mut ray = Ray::new(hit.spawn(s.wi), s.wi);
+            for depth in 0..=self.cfg.max_depth {
+                c.rays.gather += 1;
+                let Some(y) = self.frame.trace(&ray) else { break };
+                let my = self.frame.scene.material(y.prim);
+                let wy = -ray.dir;
+                if my.is_specular() {
+                    if depth == self.cfg.max_depth {
+                        break;
+                    }
+                    let Some(s) = my.sample(y.n, wy, rng.gen(), [rng.gen(), rng.gen()]) else { break };
+                    beta *= s.weight(y.n);
+                    ray = Ray::new(y.spawn(s.wi), s.wi);
+                    continue;
+                }
+                let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
+                    e.direct + e.indirect + e.caustic
+                } else {
+                    let mut ly = direct_light(self.frame, &y, wy, my, 1, rng, c);
+                    c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
+                    let nb = &mut scratch.neighbors;
+                    let g = &self.gathers;
+                    ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &g.caustic, nb);
+                    ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &g.indirect, nb);
+                    ly
+                };
+                sum += beta * ly;
+                break;
+            }
+        }
+        sum / n_rays as f32
+    }
+}
