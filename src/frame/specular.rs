@@ -30,14 +30,15 @@ pub enum Start {
     Ray(Ray),
 }
 
-/// Follows `start` through at most `max_depth` specular bounces. `visit(hit, wo, material,
-/// beta)` sees every surface reached, the landing included (camera paths add the emission seen
-/// there); `count` counts each ray traced here. Returns the landing, or `None` if the walk
-/// leaves the scene, is absorbed, or runs out of depth.
+/// Follows `start`, carrying throughput `beta`, through at most `max_depth` specular bounces.
+/// `visit(hit, wo, material, beta)` sees every surface reached, the landing included (camera
+/// paths add the emission seen there); `count` counts each ray traced here. Returns the
+/// landing, or `None` if the walk leaves the scene, is absorbed, or runs out of depth.
 #[allow(clippy::too_many_arguments)]
 pub fn walk<'s, A: Accel>(
     frame: &Frame<'s, A>,
     start: Start,
+    mut beta: Vec3,
     max_depth: u32,
     rng: &mut Pcg32,
     c: &mut Counters,
@@ -48,7 +49,6 @@ pub fn walk<'s, A: Accel>(
         Start::Traced(ray, hit) => (ray, Some(hit)),
         Start::Ray(ray) => (ray, None),
     };
-    let mut beta = Vec3::ONE;
     for depth in 0..=max_depth {
         let hit = match first.take() {
             Some(hit) => hit.and_then(|h| frame.surface(h)),

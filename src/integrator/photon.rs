@@ -12,7 +12,7 @@ use crate::config::{Component, IndirectMode, PhotonConfig};
 use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
-use crate::frame::specular::{walk, Start};
+use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material};
@@ -218,11 +218,12 @@ impl<A: Accel> Shading<'_, '_, A> {
         let mut l = Vec3::ZERO;
         let start = Start::Traced(ray, first);
         let count = |c: &mut Counters| c.rays.specular += 1;
-        let landing = walk(self.frame, start, self.cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
-            if emitted {
-                l += beta * m.emitted(hit.n, wo);
-            }
-        });
+        let landing =
+            walk(self.frame, start, Vec3::ONE, self.cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
+                if emitted {
+                    l += beta * m.emitted(hit.n, wo);
+                }
+            });
         if let Some(v) = landing {
             l += v.beta * self.shade(&v.hit, v.wo, v.m, rng, scratch, c);
         }
@@ -305,36 +306,23 @@ impl<A: Accel> Shading<'_, '_, A> {
         let mut sum = Vec3::ZERO;
         for _ in 0..n_rays {
             let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
-            let mut beta = s.weight(hit.n);
-            let mut ray = Ray::new(hit.spawn(s.wi), s.wi);
-            for depth in 0..=self.cfg.max_depth {
-                c.rays.gather += 1;
-                let Some(y) = self.frame.trace(&ray) else { break };
-                let my = self.frame.scene.material(y.prim);
-                let wy = -ray.dir;
-                if my.is_specular() {
-                    if depth == self.cfg.max_depth {
-                        break;
-                    }
-                    let Some(s) = my.sample(y.n, wy, rng.gen(), [rng.gen(), rng.gen()]) else { break };
-                    beta *= s.weight(y.n);
-                    ray = Ray::new(y.spawn(s.wi), s.wi);
-                    continue;
-                }
-                let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
-                    e.direct + e.indirect + e.caustic
-                } else {
-                    let mut ly = direct_light(self.frame, &y, wy, my, 1, rng, c);
-                    c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
-                    let nb = &mut scratch.neighbors;
-                    let g = &self.gathers;
-                    ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &g.caustic, nb);
-                    ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &g.indirect, nb);
-                    ly
-                };
-                sum += beta * ly;
-                break;
-            }
+            let start = Start::Ray(Ray::new(hit.spawn(s.wi), s.wi));
+            let count = |c: &mut Counters| c.rays.gather += 1;
+            let walked =
+                walk(self.frame, start, s.weight(hit.n), self.cfg.max_depth, rng, c, count, |_, _, _, _| {});
+            let Some(Landing { hit: y, wo: wy, m: my, beta }) = walked else { continue };
+            let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
+                e.direct + e.indirect + e.caustic
+            } else {
+                let mut ly = direct_light(self.frame, &y, wy, my, 1, rng, c);
+                c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
+                let nb = &mut scratch.neighbors;
+                let g = &self.gathers;
+                ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &g.caustic, nb);
+                ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &g.indirect, nb);
+                ly
+            };
+            sum += beta * ly;
         }
         sum / n_rays as f32
     }

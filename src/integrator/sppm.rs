@@ -140,9 +140,16 @@ fn trace_camera<'s, A: Accel>(
 ) -> (Vec3, Option<Landing<'s>>) {
     let mut l = Vec3::ZERO;
     let count = |c: &mut Counters| c.rays.specular += 1;
-    let landing = walk(frame, Start::Traced(ray, first), cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
-        l += beta * m.emitted(hit.n, wo)
-    });
+    let landing = walk(
+        frame,
+        Start::Traced(ray, first),
+        Vec3::ONE,
+        cfg.max_depth,
+        rng,
+        c,
+        count,
+        |hit, wo, m, beta| l += beta * m.emitted(hit.n, wo),
+    );
     if let Some(v) = &landing {
         l += v.beta * direct_light(frame, &v.hit, v.wo, v.m, cfg.light_samples, rng, c);
     }
