@@ -19,11 +19,15 @@ pub struct Emitter {
     pub power: Vec3,
 }
 
-/// Where a photon starts and where it goes.
+/// Where a photon starts, where it goes, and the flux the sample stands for.
 #[derive(Clone, Copy, Debug)]
 pub struct Emission {
     pub origin: Vec3,
     pub dir: Vec3,
+    /// `le |cos| / (pdf_pos pdf_dir)` ([`EmissionSample::photon_power`](super::EmissionSample::photon_power)):
+    /// the emitter's whole flux when it is sampled in proportion to what it emits, as every
+    /// light here is; divided by the photons shot, it is the photon's power.
+    pub power: Vec3,
 }
 
 /// All lights of a scene, ready for sampling.
@@ -112,7 +116,11 @@ impl LightSet {
             (Some(t), Light::Area(a)) => a.sample_emission_on_triangle(t, u_pos, u_dir)?,
             (_, l) => l.sample_emission(u_pos, u_dir)?,
         };
-        (s.dir.is_finite() && s.ray_origin.is_finite())
-            .then_some(Emission { origin: s.ray_origin, dir: s.dir })
+        let power = s.photon_power();
+        (s.dir.is_finite() && s.ray_origin.is_finite() && power.is_finite()).then_some(Emission {
+            origin: s.ray_origin,
+            dir: s.dir,
+            power,
+        })
     }
 }

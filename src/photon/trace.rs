@@ -1,9 +1,11 @@
 //! The photon pass (Jensen 2001, ch. 5; the lecture's slides on emission, storage, absorption
 //! and bouncing).
 //!
-//! * The budget is split among emitters in proportion to their power, and every photon of a map
-//!   carries the same power: brighter lights emit more photons, not stronger ones. Counts are
-//!   rounded stochastically so the split stays unbiased.
+//! * The budget is split among emitters in proportion to their power, and a photon carries the
+//!   flux of its emission sample ([`crate::light::Emission::power`]) over the photons expected
+//!   from its emitter: every light samples in proportion to what it emits, so every photon of a
+//!   map carries the same power, and brighter lights emit more photons, not stronger ones.
+//!   Counts are rounded stochastically so the split stays unbiased.
 //! * Emissive triangles are emitters of their own, each covered by a stratified grid (one photon
 //!   per cell, at a random position inside it) with cosine-distributed directions.
 //! * At each diffuse or glossy hit a copy of the photon is stored and the original goes on; the
@@ -128,20 +130,42 @@ pub fn specular_targets(scene: &Scene) -> Vec<Target> {
         .collect()
 }
 
-/// One emitter's share of a pass: how many photons (or tries) and their power.
+/// One emitter's share of a pass: how many photons (or tries), for which map and channel, and
+/// the factor that turns an emission sample's flux into a photon's power (one over the
+/// photons expected from the emitter).
 #[derive(Clone, Copy, Debug)]
-struct Job {
+struct EmitterShare {
     emitter: usize,
     map: usize,
     channel: Option<usize>,
     count: u64,
-    power: Vec3,
+    scale: f32,
 }
 
-/// Splits `n` photons among emitters by power, per map. Returns the jobs and the photons
+impl EmitterShare {
+    /// The power of a photon whose emission sample stands for the flux `flux`.
+    #[inline]
+    fn photon_power(&self, flux: Vec3) -> Vec3 {
+        match self.channel {
+            Some(c) => {
+                let mut p = Vec3::ZERO;
+                p[c] = flux[c] * self.scale;
+                p
+            }
+            None => flux * self.scale,
+        }
+    }
+}
+
+/// Splits `n` photons among emitters by power, per map. Returns the shares and the photons
 /// allotted to each map.
-fn allocate(emitters: &[Emitter], n: u64, color: ColorMode, rng: &mut Pcg32) -> (Vec<Job>, Vec<u64>) {
-    let mut jobs = Vec::new();
+fn allocate(
+    emitters: &[Emitter],
+    n: u64,
+    color: ColorMode,
+    rng: &mut Pcg32,
+) -> (Vec<EmitterShare>, Vec<u64>) {
+    let mut shares = Vec::new();
     let channels: Vec<Option<usize>> = match color {
         ColorMode::PerChannel => vec![Some(0), Some(1), Some(2)],
         ColorMode::Rgb => vec![None],
@@ -167,21 +191,13 @@ fn allocate(emitters: &[Emitter], n: u64, color: ColorMode, rng: &mut Pcg32) -> 
             if count == 0 {
                 continue;
             }
-            // Equal power: this map's flux over its expected photon count, in the photon's
-            // channel (or, for RGB photons, the emitter's colour scaled to equal weight).
-            let power = match channel {
-                Some(c) => {
-                    let mut p = Vec3::ZERO;
-                    p[c] = (total / n_map as f64) as f32;
-                    p
-                }
-                None => e.power * ((total / n_map as f64) / w) as f32,
-            };
+            // One over the photons expected from this emitter: `n_map w / total`.
+            let scale = ((total / n_map as f64) / w) as f32;
             emitted[map] += count;
-            jobs.push(Job { emitter: i, map, channel, count, power });
+            shares.push(EmitterShare { emitter: i, map, channel, count, scale });
         }
     }
-    (jobs, emitted)
+    (shares, emitted)
 }
 
 /// What one pass does.
@@ -210,13 +226,13 @@ pub fn trace_pass<A: Accel>(
     let PassSpec { pass, n, color, max_bounces, targets, aim, seed } = *spec;
     let emitters = lights.emitters();
     let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, u64::MAX));
-    let (jobs, emitted) = allocate(emitters, n, color, &mut alloc_rng);
-    // Fixed chunks over the concatenated jobs.
+    let (shares, emitted) = allocate(emitters, n, color, &mut alloc_rng);
+    // Fixed chunks over the concatenated shares.
     let mut chunks: Vec<(usize, u64, u64)> = Vec::new();
-    for (j, job) in jobs.iter().enumerate() {
+    for (j, share) in shares.iter().enumerate() {
         let mut start = 0;
-        while start < job.count {
-            let end = (start + CHUNK).min(job.count);
+        while start < share.count {
+            let end = (start + CHUNK).min(share.count);
             chunks.push((j, start, end));
             start = end;
         }
@@ -226,13 +242,13 @@ pub fn trace_pass<A: Accel>(
         .par_iter()
         .enumerate()
         .map(|(ci, &(j, start, end))| {
-            let job = &jobs[j];
+            let share = &shares[j];
             let mut rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, ci as u64));
             let mut out = vec![Vec::new(); n_maps];
             let (mut rays, mut paths) = (0u64, 0u64);
-            let e = &emitters[job.emitter];
+            let e = &emitters[share.emitter];
             for i in start..end {
-                let u_pos = stratum(i, job.count, &mut rng);
+                let u_pos = stratum(i, share.count, &mut rng);
                 let Some(em) = lights.sample_emission(e, u_pos, [rng.gen(), rng.gen()]) else { continue };
                 if pass == Pass::Caustic && aim && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
                     continue;
@@ -244,10 +260,11 @@ pub fn trace_pass<A: Accel>(
                     pass,
                     em.origin,
                     em.dir,
-                    job,
+                    share.photon_power(em.power),
+                    share.channel,
                     max_bounces,
                     &mut rng,
-                    &mut out[job.map],
+                    &mut out[share.map],
                 );
             }
             progress.advance(end - start);
@@ -273,13 +290,13 @@ fn trace_photon<A: Accel>(
     pass: Pass,
     origin: Vec3,
     dir: Vec3,
-    job: &Job,
+    mut power: Vec3,
+    channel: Option<usize>,
     max_bounces: u32,
     rng: &mut Pcg32,
     out: &mut Vec<PhotonHit>,
 ) -> u64 {
     let mut ray = Ray::new(origin, dir);
-    let mut power = job.power;
     let mut specular_only = true;
     let mut rays = 0;
     for bounce in 0..=max_bounces {
@@ -307,8 +324,7 @@ fn trace_photon<A: Accel>(
         if bounce == max_bounces {
             break;
         }
-        let Some(s) =
-            m.scatter_photon(n, wo, power, job.channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()])
+        let Some(s) = m.scatter_photon(n, wo, power, channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()])
         else {
             break;
         };
@@ -344,13 +360,13 @@ pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed
     }
     let emitters = lights.emitters();
     let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 7, 7));
-    let (jobs, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
+    let (shares, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
     let (mut accepted, mut total) = (0u64, 0u64);
-    for job in &jobs {
-        for i in 0..job.count {
+    for share in &shares {
+        for i in 0..share.count {
             total += 1;
-            let u_pos = stratum(i, job.count, &mut rng);
-            if let Some(em) = lights.sample_emission(&emitters[job.emitter], u_pos, [rng.gen(), rng.gen()]) {
+            let u_pos = stratum(i, share.count, &mut rng);
+            if let Some(em) = lights.sample_emission(&emitters[share.emitter], u_pos, [rng.gen(), rng.gen()]) {
                 accepted += u64::from(targets.iter().any(|t| t.hit_by(em.origin, em.dir)));
             }
         }
