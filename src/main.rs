@@ -358,8 +358,8 @@ fn info(path: &std::path::Path) -> Result<()> {
         scene.camera.height,
         scene.camera.eye.to_array()
     );
-    for (name, m) in scene.material_names.iter().zip(&scene.materials) {
-        let count = scene.tri_material.iter().filter(|&&i| scene.materials[i as usize] == *m).count();
+    let count = scene.triangles_per_material();
+    for ((name, m), count) in scene.material_names.iter().zip(&scene.materials).zip(count) {
         println!("material   {name}: {m:?} ({count} triangles)");
     }
     for l in &scene.lights {

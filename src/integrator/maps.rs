@@ -1,13 +1,14 @@
 //! The photon stages of a pass, shared by two-pass and progressive photon mapping: the scene
-//! analysis that decides which maps are needed, the indirect and caustic photon passes, and the
-//! balancing of the maps, each stage recorded in the stats with why it ran or why not.
+//! analysis that decides which maps are needed, the indirect and caustic photon passes, the
+//! balancing of the maps (each stage recorded in the stats with why it ran or why not), and the
+//! gather parameters both read the maps with.
 
 use crate::accel::Accel;
-use crate::config::{CausticPass, ColorMode, PhotonPasses};
+use crate::config::{CausticPass, ColorMode, Gathers, PhotonPasses};
 use crate::frame::{Frame, Progress};
 use crate::light::LightSet;
 use crate::photon::irradiance::{self, SitePoint};
-use crate::photon::map::{MapColor, PhotonMap, PhotonMaps};
+use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
 use crate::photon::trace::{self, Pass, PassSpec};
 use crate::scene::Scene;
 use crate::stats::Stats;
@@ -203,6 +204,35 @@ impl MapStages<'_> {
         let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
         record_maps(stats, "caustic", &maps);
         drop_empty(stats, "caustic", maps)
+    }
+}
+
+/// The gathers of a photon-mapping render, with radii resolved for the scene.
+#[derive(Clone, Copy, Debug)]
+pub struct GatherPair {
+    pub indirect: GatherParams,
+    pub caustic: GatherParams,
+}
+
+impl GatherPair {
+    /// `gathers` with the default radii of `scene`: a tenth of its bounding sphere's radius for
+    /// indirect light, a quarter of that for caustics.
+    pub fn new(gathers: &Gathers, scene: &Scene) -> Self {
+        let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
+        let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
+            k: k as usize,
+            max_radius: radius.unwrap_or(default),
+            kernel: gathers.kernel,
+            flatten: 8.0,
+        };
+        GatherPair {
+            indirect: params(gathers.gather_photons, gathers.gather_radius, auto_radius),
+            caustic: params(
+                gathers.caustic_gather_photons,
+                gathers.caustic_gather_radius,
+                0.25 * auto_radius,
+            ),
+        }
     }
 }
 

@@ -164,11 +164,20 @@ struct Schedule<'a> {
     /// Time the passes took (setup excluded), to predict the next one.
     pass_seconds: f64,
     pass_start: Option<Instant>,
+    progressive: bool,
 }
 
 impl<'a> Schedule<'a> {
     pub fn new(cfg: &RenderConfig, control: Control<'a>) -> Self {
-        Schedule { passes: cfg.passes, time: cfg.time, control, done: 0, pass_seconds: 0.0, pass_start: None }
+        Schedule {
+            passes: cfg.passes,
+            time: cfg.time,
+            control,
+            done: 0,
+            pass_seconds: 0.0,
+            pass_start: None,
+            progressive: cfg.is_progressive(),
+        }
     }
 
     /// Passes finished so far.
@@ -179,7 +188,7 @@ impl<'a> Schedule<'a> {
     /// Whether the render is progressive (more than one pass possible): inner stages then
     /// report no progress of their own.
     pub fn is_progressive(&self) -> bool {
-        self.time.is_some() || self.passes.is_some_and(|p| p > 1)
+        self.progressive
     }
 
     /// The total the progress bar counts to: passes, or milliseconds of the time budget.

@@ -5,7 +5,7 @@
 //! rays, caustics from the caustic map, indirect light from the indirect map (radiance
 //! estimate) or by final gathering.
 
-use super::maps::{Analysis, MapStages};
+use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassRenderer};
 use crate::accel::Accel;
 use crate::config::{Component, IndirectMode, PhotonConfig};
@@ -18,7 +18,7 @@ use crate::geometry::Ray;
 use crate::material::{face_forward, Material};
 use crate::photon::irradiance::{Irradiance, PrecomputedIrradiance, SitePoint};
 use crate::photon::kdtree::Neighbor;
-use crate::photon::map::{GatherParams, PhotonMaps};
+use crate::photon::map::PhotonMaps;
 use crate::sampling::derive_seed;
 use crate::stats::{MapStats, Stats};
 use glam::Vec3;
@@ -30,35 +30,6 @@ const IRRADIANCE_STRIDE: usize = 4;
 
 /// Shadow-ray samples for the direct irradiance of each precomputed site.
 const SITE_LIGHT_SAMPLES: u32 = 16;
-
-/// The gathers of a photon-mapping render, with radii resolved for the scene.
-#[derive(Clone, Copy, Debug)]
-pub struct GatherPair {
-    pub indirect: GatherParams,
-    pub caustic: GatherParams,
-}
-
-impl GatherPair {
-    /// `gathers` with the default radii of `scene`: a tenth of its bounding sphere's radius for
-    /// indirect light, a quarter of that for caustics.
-    pub fn new(gathers: &crate::config::Gathers, scene: &crate::scene::Scene) -> Self {
-        let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
-        let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
-            k: k as usize,
-            max_radius: radius.unwrap_or(default),
-            kernel: gathers.kernel,
-            flatten: 8.0,
-        };
-        GatherPair {
-            indirect: params(gathers.gather_photons, gathers.gather_radius, auto_radius),
-            caustic: params(
-                gathers.caustic_gather_photons,
-                gathers.caustic_gather_radius,
-                0.25 * auto_radius,
-            ),
-        }
-    }
-}
 
 /// The two-pass photon mapper over a render's passes.
 pub struct PhotonMapper<'f, 'a, A: Accel> {

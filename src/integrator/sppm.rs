@@ -19,9 +19,8 @@
 //! are densest, so caustics start small), bounded by `--gather-radius`; it then shrinks so that
 //! bias and variance both go to zero as passes are added.
 
-use super::maps::{Analysis, MapStages};
+use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassRenderer};
-use super::photon::GatherPair;
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
 use crate::film::Film;

@@ -366,7 +366,8 @@ pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed
         for i in 0..share.count {
             total += 1;
             let u_pos = stratum(i, share.count, &mut rng);
-            if let Some(em) = lights.sample_emission(&emitters[share.emitter], u_pos, [rng.gen(), rng.gen()]) {
+            if let Some(em) = lights.sample_emission(&emitters[share.emitter], u_pos, [rng.gen(), rng.gen()])
+            {
                 accepted += u64::from(targets.iter().any(|t| t.hit_by(em.origin, em.dir)));
             }
         }

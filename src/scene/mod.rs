@@ -14,7 +14,7 @@ pub use error::{one_line, SceneError};
 pub use file::{LightEntry, MaterialEntry, MaterialKind, SceneFile};
 pub use obj::MtlMaterial;
 
-use crate::config::RenderSettings;
+use crate::config::{RenderSettings, MAX_IMAGE_SIDE};
 use crate::geometry::{Aabb, TriangleMesh};
 use crate::light::LightDesc;
 use crate::material::Material;
@@ -22,9 +22,6 @@ use file::{finite3, nonneg3, reflectance3, Scale};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-
-/// Largest image side accepted (a 16k × 16k float RGB film is 3 GiB).
-pub const MAX_IMAGE_SIDE: u32 = 16384;
 
 /// A loaded, validated scene.
 #[derive(Clone, Debug)]
@@ -91,7 +88,7 @@ impl Scene {
         let (tri_material, materials, material_names) = resolve_materials(path, &tri_names, &mtl, &file)?;
         let lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
-        validate_render(path, &file.render)?;
+        validate_render(path, &file.render, &camera)?;
         Ok(Scene {
             path: path.to_owned(),
             camera,
@@ -143,6 +140,16 @@ impl Scene {
     #[inline]
     pub fn material(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
+    }
+
+    /// How many triangles use each material (by index: two materials with equal values are
+    /// counted apart).
+    pub fn triangles_per_material(&self) -> Vec<usize> {
+        let mut count = vec![0; self.materials.len()];
+        for &m in &self.tri_material {
+            count[m as usize] += 1;
+        }
+        count
     }
 }
 
@@ -347,18 +354,13 @@ fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError>
     })
 }
 
-/// Refuses settings that cannot be honoured, before any work is done.
-fn validate_render(path: &Path, r: &RenderSettings) -> Result<(), SceneError> {
-    for (name, v) in
-        [("render.gather_radius", r.gather_radius), ("render.caustic_gather_radius", r.caustic_gather_radius)]
-    {
-        if let Some(v) = v {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(SceneError::field(path, name, format!("{v} must be finite and positive")));
-            }
-        }
+/// Refuses `[render]` settings that cannot be honoured, before any work is done: the table is
+/// resolved at the camera's size by the same checks every render runs.
+fn validate_render(path: &Path, r: &RenderSettings, camera: &Camera) -> Result<(), SceneError> {
+    match r.resolve(camera.width, camera.height) {
+        Ok(_) => Ok(()),
+        Err(e) => Err(SceneError::field(path, &format!("render.{}", e.field), e.message)),
     }
-    Ok(())
 }
 
 #[cfg(test)]

@@ -207,3 +207,16 @@ fn mtl_illum_models_map_to_materials() {
         assert_eq!(s.materials[0], expected);
     }
 }
+
+#[test]
+fn triangles_are_counted_per_material_even_when_two_are_equal() {
+    let mut s = Scene::load(shipped("cornell")).unwrap();
+    // Make the second material equal to the first: the counts must not merge.
+    s.materials[1] = s.materials[0];
+    let count = s.triangles_per_material();
+    assert_eq!(count.len(), s.materials.len());
+    assert_eq!(count.iter().sum::<usize>(), s.mesh.len());
+    for (i, &n) in count.iter().enumerate() {
+        assert_eq!(n, s.tri_material.iter().filter(|&&m| m as usize == i).count());
+    }
+}
