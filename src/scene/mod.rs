@@ -359,7 +359,7 @@ fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError>
 fn validate_render(path: &Path, r: &RenderSettings, camera: &Camera) -> Result<(), SceneError> {
     match r.resolve(camera.width, camera.height) {
         Ok(_) => Ok(()),
-        Err(e) => Err(SceneError::field(path, &format!("render.{}", e.field), e.message)),
+        Err(e) => Err(SceneError::field(path, format!("render.{}", e.field), e.message)),
     }
 }
 
