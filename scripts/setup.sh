@@ -30,6 +30,6 @@ if ! command -v cargo >/dev/null && [ -f "$HOME/.cargo/env" ]; then
     . "$HOME/.cargo/env"
 fi
 if ! command -v cargo >/dev/null; then
-    echo "setup: no Rust toolchain (cargo) on PATH; install one with rustup (Rust >= 1.80)" >&2
+    echo "setup: no Rust toolchain (cargo) on PATH; install one with rustup (Rust >= 1.82)" >&2
     exit 1
 fi

@@ -186,7 +186,7 @@ pub struct AgreeArgs {
 pub struct ConvergeArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
-    /// Reference image (EXR); the renders take its size unless --width/--height are given.
+    /// Reference image (EXR); the renders take its size (after --downsample).
     #[arg(long)]
     pub reference: PathBuf,
     /// Box-downsample the reference by this factor first (renders get the smaller size).

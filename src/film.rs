@@ -1,5 +1,5 @@
 //! The film: a float RGB image of mean radiance per pixel, written as OpenEXR (float32 R, G, B,
-//! row 0 at the top) and as a tone-mapped sRGB PNG preview. Files are written atomically: to a
+//! row 0 at the top) and as an sRGB PNG preview (linear radiance clamped at 1, then the sRGB curve). Files are written atomically: to a
 //! temporary file beside the target, then renamed over it, so an existing image is only ever
 //! replaced by a complete new one.
 
@@ -136,7 +136,7 @@ fn atomic_write(path: &Path, write: impl FnOnce(&Path) -> Result<(), String>) ->
 }
 
 /// Error of `a` against reference `b`: RMSE over all pixels and channels, and relative MSE
-/// `mean((a - b)^2 / (b^2 + 0.01))` (the metric of `SCENES.md`).
+/// `mean((a - b)^2 / (b^2 + 0.01))` (the metric of `scenes/SCENES.md`).
 pub fn compare(a: &Film, b: &Film) -> Option<(f64, f64)> {
     if a.width != b.width || a.height != b.height {
         return None;

@@ -1,4 +1,4 @@
-//! The stress suite of issue 5 (`photonmap::stress`, also `photonmap stress`): every case on
+//! The stress suite (`photonmap::stress`, also `photonmap stress`): every case on
 //! every backend, in its quick form (fewer samples and photons; the same scenes, bounds and
 //! agreement checks), and every row must pass. Also: Embree gives the same hits on the same
 //! rays in two runs (the thread-count determinism of the renders is in `tests/accuracy.rs`,

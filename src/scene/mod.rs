@@ -1,5 +1,5 @@
 //! Scenes: a TOML file (camera, meshes, material overrides, lights, render settings) with
-//! geometry and materials from Wavefront OBJ/MTL. Conventions are those of `SCENES.md`: metres,
+//! geometry and materials from Wavefront OBJ/MTL. Conventions are those of `scenes/SCENES.md`: metres,
 //! right-handed +Y up, counter-clockwise front faces, flat shading.
 //!
 //! Loading validates everything up front and reports the file and the line or field at fault.

@@ -1,4 +1,4 @@
-//! The stress suite of issue 5: numerical stability of the whole renderer under extreme scenes.
+//! The stress suite: numerical stability of the whole renderer under extreme scenes.
 //!
 //! Each [`Case`] builds its scenes in memory ([`scenes`]), renders them with the real renderer
 //! ([`render_scene`](crate::integrator::render_scene)) on every backend asked for, and checks a

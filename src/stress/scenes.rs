@@ -1,5 +1,5 @@
 //! The stress suite's scenes, built in memory (no files): a small builder for quads, boxes and
-//! materials, and one constructor per scene of issue 5.
+//! materials, and one constructor per scene of the suite.
 
 use crate::config::RenderSettings;
 use crate::geometry::{TriangleMesh, Vec3};
