@@ -13,6 +13,7 @@ use photonmap::accel::AccelKind;
 use photonmap::config::{ColorMode, Component, IndirectMode, Integrator, RenderSettings};
 use std::fmt::Write;
 use std::path::Path;
+#[allow(dead_code)] // the references are for the tests that compare against them
 mod common;
 
 use common::{render_checked, scene};
