@@ -168,11 +168,6 @@ impl<T> KdTree<T> {
         &self.items[index as usize]
     }
 
-    /// Gives the items back, in tree order.
-    pub fn into_items(self) -> Vec<T> {
-        self.items
-    }
-
     /// Tight bounding box of all items ([`Aabb::EMPTY`] for an empty tree).
     #[inline]
     pub fn bounds(&self) -> Aabb {
