@@ -12,6 +12,11 @@
 
 use crate::accel::{Accel, Hit};
 use crate::geometry::{offset_ray_origin, Aabb, Ray, TriangleMesh, Vec3};
+use crate::sampling::{
+    sample_cosine_hemisphere, sample_uniform_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
+    spherical_direction, Distribution1D, Frame,
+};
+use crate::scene::Camera;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
@@ -62,54 +67,31 @@ pub struct CameraLike {
     pub target: Vec3,
 }
 
-/// Picks surface points with probability proportional to area.
+/// Picks surface points uniformly by area: a triangle with probability proportional to its
+/// area, then a uniform point on it. Triangles without a normal (zero area) are never picked.
 struct SurfaceSampler<'a> {
     mesh: &'a TriangleMesh,
-    prims: Vec<u32>,
-    cdf: Vec<f64>,
+    triangles: Distribution1D,
 }
 
 impl<'a> SurfaceSampler<'a> {
     fn new(mesh: &'a TriangleMesh) -> Self {
-        let (mut prims, mut cdf, mut sum) = (Vec::new(), Vec::new(), 0.0f64);
-        for i in 0..mesh.len() as u32 {
-            let a = mesh.area(i) as f64;
-            if a > 0.0 && a.is_finite() && mesh.normal(i).is_some() {
-                sum += a;
-                prims.push(i);
-                cdf.push(sum);
-            }
-        }
-        SurfaceSampler { mesh, prims, cdf }
+        let areas: Vec<f32> = (0..mesh.len() as u32)
+            .map(|i| if mesh.normal(i).is_some() { mesh.area(i) } else { 0.0 })
+            .collect();
+        SurfaceSampler { mesh, triangles: Distribution1D::new(&areas) }
     }
 
     /// A point, its unit geometric normal and its rounding-error bound; `None` without any
     /// area.
     fn sample(&self, rng: &mut Pcg64) -> Option<(Vec3, Vec3, Vec3)> {
-        let total = *self.cdf.last()?;
-        let x = rng.gen::<f64>() * total;
-        let k = self.cdf.partition_point(|&c| c <= x).min(self.prims.len() - 1);
-        let prim = self.prims[k];
-        let (r1, r2) = (rng.gen::<f32>().sqrt(), rng.gen::<f32>());
-        let (u, v) = (r1 * (1.0 - r2), r1 * r2);
+        let (prim, _, _) = self.triangles.sample(rng.gen())?;
+        let prim = prim as u32;
+        // Barycentrics [b0, b1, b2] of the point b0 v0 + b1 v1 + b2 v2, i.e. (u, v) = (b1, b2).
+        let [_, u, v] = sample_uniform_triangle([rng.gen(), rng.gen()]);
         let (p, err) = self.mesh.point_and_error(prim, u, v);
         Some((p, self.mesh.normal(prim)?, err))
     }
-}
-
-fn uniform_sphere(rng: &mut Pcg64) -> Vec3 {
-    let z = 1.0 - 2.0 * rng.gen::<f32>();
-    let phi = std::f32::consts::TAU * rng.gen::<f32>();
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// An orthonormal basis `(t, b)` perpendicular to unit `n` (Duff et al. 2017).
-fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let s = 1.0f32.copysign(n.z);
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    (Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), Vec3::new(b, s + n.y * n.y * a, -n.y))
 }
 
 /// Scene bounds, or a unit box for an empty mesh.
@@ -124,7 +106,7 @@ fn scene_bounds(mesh: &TriangleMesh) -> Aabb {
 
 fn random_ray(b: &Aabb, rng: &mut Pcg64) -> Ray {
     let t = Vec3::new(rng.gen(), rng.gen(), rng.gen());
-    Ray::new(b.min + t * (b.max - b.min), uniform_sphere(rng))
+    Ray::new(b.min + t * (b.max - b.min), sample_uniform_sphere([rng.gen(), rng.gen()]))
 }
 
 fn camera_rays(b: &Aabb, cam: Option<CameraLike>, n: usize) -> Vec<Ray> {
@@ -138,18 +120,15 @@ fn camera_rays(b: &Aabb, cam: Option<CameraLike>, n: usize) -> Vec<Ray> {
     let dist = (cam.target - cam.eye).length();
     // Frame the bounding sphere from outside; 45° half-angle from inside it.
     let tan_half = if dist > radius { 1.1 * radius / (dist * dist - radius * radius).sqrt() } else { 1.0 };
-    let up0 = if forward.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
-    let right = forward.cross(up0).normalize();
-    let up = right.cross(forward);
+    let vfov = (2.0 * tan_half.atan()).to_degrees().clamp(1e-3, 179.0);
+    let up = if forward.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
     let side = (n as f64).sqrt().ceil().max(1.0) as usize;
-    (0..n)
-        .map(|k| {
-            let (i, j) = (k % side, k / side);
-            let sx = ((i as f32 + 0.5) / side as f32 * 2.0 - 1.0) * tan_half;
-            let sy = (1.0 - (j as f32 + 0.5) / side as f32 * 2.0) * tan_half;
-            Ray::new(cam.eye, forward + sx * right + sy * up)
-        })
-        .collect()
+    // One ray through the centre of each pixel of a square side x side film. The frame is built
+    // at the origin (the eye may be far out, where eye + forward would round) and moved.
+    let camera = Camera::look_at(Vec3::ZERO, forward, up, vfov, side as u32, side as u32)
+        .map(|c| Camera { eye: cam.eye, ..c })
+        .expect("a unit forward, an up not parallel to it and a field of view in (0, 180)");
+    (0..n).map(|k| camera.ray((k % side) as f32 + 0.5, (k / side) as f32 + 0.5)).collect()
 }
 
 /// Generates `n` rays, about a fifth of each [`RayKind`], deterministically from `seed`.
@@ -176,23 +155,22 @@ pub fn generate_rays(
             let ray = match kind {
                 RayKind::Surface => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
-                    let (t, b) = basis(n);
-                    let (r1, r2) = (rng.gen::<f32>(), rng.gen::<f32>());
+                    let u = [rng.gen(), rng.gen()];
                     // Cosine-weighted half the time, uniform over the hemisphere otherwise.
-                    let cos = if rng.gen::<bool>() { (1.0 - r1).sqrt() } else { 1.0 - r1 };
-                    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                    let phi = std::f32::consts::TAU * r2;
-                    let dir = sin * phi.cos() * t + sin * phi.sin() * b + cos * n;
-                    Ray::new(offset_ray_origin(p, err, n), dir)
+                    let local = if rng.gen::<bool>() {
+                        sample_cosine_hemisphere(u)
+                    } else {
+                        sample_uniform_hemisphere(u)
+                    };
+                    Ray::new(offset_ray_origin(p, err, n), Frame::from_z(n).from_local(local))
                 }),
                 RayKind::Grazing => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
-                    let (t, b) = basis(n);
                     let phi = std::f32::consts::TAU * rng.gen::<f32>();
-                    // Log-uniform elevation between 0.01° and 1°.
+                    // Log-uniform elevation between 0.01° and 1° (the polar angle's complement).
                     let elev = (0.01f32 * 100f32.powf(rng.gen::<f32>())).to_radians();
-                    let tangent = phi.cos() * t + phi.sin() * b;
-                    Ray::new(offset_ray_origin(p, err, n), elev.cos() * tangent + elev.sin() * n)
+                    let local = spherical_direction(elev.cos(), elev.sin(), phi);
+                    Ray::new(offset_ray_origin(p, err, n), Frame::from_z(n).from_local(local))
                 }),
                 RayKind::Shadow => {
                     surf.sample(&mut rng).zip(surf.sample(&mut rng)).and_then(|((p, np, ep), (q, nq, eq))| {
