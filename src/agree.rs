@@ -12,6 +12,11 @@
 
 use crate::accel::{Accel, Hit};
 use crate::geometry::{offset_ray_origin, Aabb, Ray, TriangleMesh, Vec3};
+use crate::sampling::{
+    sample_cosine_hemisphere, sample_uniform_hemisphere, sample_uniform_sphere, sample_uniform_triangle,
+    spherical_direction, Distribution1D, Frame,
+};
+use crate::scene::Camera;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;
@@ -62,54 +67,31 @@ pub struct CameraLike {
     pub target: Vec3,
 }
 
-/// Picks surface points with probability proportional to area.
+/// Picks surface points uniformly by area: a triangle with probability proportional to its
+/// area, then a uniform point on it. Triangles without a normal (zero area) are never picked.
 struct SurfaceSampler<'a> {
     mesh: &'a TriangleMesh,
-    prims: Vec<u32>,
-    cdf: Vec<f64>,
+    triangles: Distribution1D,
 }
 
 impl<'a> SurfaceSampler<'a> {
     fn new(mesh: &'a TriangleMesh) -> Self {
-        let (mut prims, mut cdf, mut sum) = (Vec::new(), Vec::new(), 0.0f64);
-        for i in 0..mesh.len() as u32 {
-            let a = mesh.area(i) as f64;
-            if a > 0.0 && a.is_finite() && mesh.normal(i).is_some() {
-                sum += a;
-                prims.push(i);
-                cdf.push(sum);
-            }
-        }
-        SurfaceSampler { mesh, prims, cdf }
+        let areas: Vec<f32> = (0..mesh.len() as u32)
+            .map(|i| if mesh.normal(i).is_some() { mesh.area(i) } else { 0.0 })
+            .collect();
+        SurfaceSampler { mesh, triangles: Distribution1D::new(&areas) }
     }
 
     /// A point, its unit geometric normal and its rounding-error bound; `None` without any
     /// area.
     fn sample(&self, rng: &mut Pcg64) -> Option<(Vec3, Vec3, Vec3)> {
-        let total = *self.cdf.last()?;
-        let x = rng.gen::<f64>() * total;
-        let k = self.cdf.partition_point(|&c| c <= x).min(self.prims.len() - 1);
-        let prim = self.prims[k];
-        let (r1, r2) = (rng.gen::<f32>().sqrt(), rng.gen::<f32>());
-        let (u, v) = (r1 * (1.0 - r2), r1 * r2);
+        let (prim, _, _) = self.triangles.sample(rng.gen())?;
+        let prim = prim as u32;
+        // Barycentrics [b0, b1, b2] of the point b0 v0 + b1 v1 + b2 v2, i.e. (u, v) = (b1, b2).
+        let [_, u, v] = sample_uniform_triangle([rng.gen(), rng.gen()]);
         let (p, err) = self.mesh.point_and_error(prim, u, v);
         Some((p, self.mesh.normal(prim)?, err))
     }
-}
-
-fn uniform_sphere(rng: &mut Pcg64) -> Vec3 {
-    let z = 1.0 - 2.0 * rng.gen::<f32>();
-    let phi = std::f32::consts::TAU * rng.gen::<f32>();
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
-}
-
-/// An orthonormal basis `(t, b)` perpendicular to unit `n` (Duff et al. 2017).
-fn basis(n: Vec3) -> (Vec3, Vec3) {
-    let s = 1.0f32.copysign(n.z);
-    let a = -1.0 / (s + n.z);
-    let b = n.x * n.y * a;
-    (Vec3::new(1.0 + s * n.x * n.x * a, s * b, -s * n.x), Vec3::new(b, s + n.y * n.y * a, -n.y))
 }
 
 /// Scene bounds, or a unit box for an empty mesh.
@@ -124,7 +106,7 @@ fn scene_bounds(mesh: &TriangleMesh) -> Aabb {
 
 fn random_ray(b: &Aabb, rng: &mut Pcg64) -> Ray {
     let t = Vec3::new(rng.gen(), rng.gen(), rng.gen());
-    Ray::new(b.min + t * (b.max - b.min), uniform_sphere(rng))
+    Ray::new(b.min + t * (b.max - b.min), sample_uniform_sphere([rng.gen(), rng.gen()]))
 }
 
 fn camera_rays(b: &Aabb, cam: Option<CameraLike>, n: usize) -> Vec<Ray> {
@@ -138,18 +120,15 @@ fn camera_rays(b: &Aabb, cam: Option<CameraLike>, n: usize) -> Vec<Ray> {
     let dist = (cam.target - cam.eye).length();
     // Frame the bounding sphere from outside; 45° half-angle from inside it.
     let tan_half = if dist > radius { 1.1 * radius / (dist * dist - radius * radius).sqrt() } else { 1.0 };
-    let up0 = if forward.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
-    let right = forward.cross(up0).normalize();
-    let up = right.cross(forward);
+    let vfov = (2.0 * tan_half.atan()).to_degrees().clamp(1e-3, 179.0);
+    let up = if forward.y.abs() < 0.99 { Vec3::Y } else { Vec3::X };
     let side = (n as f64).sqrt().ceil().max(1.0) as usize;
-    (0..n)
-        .map(|k| {
-            let (i, j) = (k % side, k / side);
-            let sx = ((i as f32 + 0.5) / side as f32 * 2.0 - 1.0) * tan_half;
-            let sy = (1.0 - (j as f32 + 0.5) / side as f32 * 2.0) * tan_half;
-            Ray::new(cam.eye, forward + sx * right + sy * up)
-        })
-        .collect()
+    // One ray through the centre of each pixel of a square side x side film. The frame is built
+    // at the origin (the eye may be far out, where eye + forward would round) and moved.
+    let camera = Camera::look_at(Vec3::ZERO, forward, up, vfov, side as u32, side as u32)
+        .map(|c| Camera { eye: cam.eye, ..c })
+        .expect("a unit forward, an up not parallel to it and a field of view in (0, 180)");
+    (0..n).map(|k| camera.ray((k % side) as f32 + 0.5, (k / side) as f32 + 0.5)).collect()
 }
 
 /// Generates `n` rays, about a fifth of each [`RayKind`], deterministically from `seed`.
@@ -176,23 +155,22 @@ pub fn generate_rays(
             let ray = match kind {
                 RayKind::Surface => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
-                    let (t, b) = basis(n);
-                    let (r1, r2) = (rng.gen::<f32>(), rng.gen::<f32>());
+                    let u = [rng.gen(), rng.gen()];
                     // Cosine-weighted half the time, uniform over the hemisphere otherwise.
-                    let cos = if rng.gen::<bool>() { (1.0 - r1).sqrt() } else { 1.0 - r1 };
-                    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                    let phi = std::f32::consts::TAU * r2;
-                    let dir = sin * phi.cos() * t + sin * phi.sin() * b + cos * n;
-                    Ray::new(offset_ray_origin(p, err, n), dir)
+                    let local = if rng.gen::<bool>() {
+                        sample_cosine_hemisphere(u)
+                    } else {
+                        sample_uniform_hemisphere(u)
+                    };
+                    Ray::new(offset_ray_origin(p, err, n), Frame::from_z(n).from_local(local))
                 }),
                 RayKind::Grazing => surf.sample(&mut rng).map(|(p, n, err)| {
                     let n = if rng.gen::<bool>() { n } else { -n };
-                    let (t, b) = basis(n);
                     let phi = std::f32::consts::TAU * rng.gen::<f32>();
-                    // Log-uniform elevation between 0.01° and 1°.
+                    // Log-uniform elevation between 0.01° and 1° (the polar angle's complement).
                     let elev = (0.01f32 * 100f32.powf(rng.gen::<f32>())).to_radians();
-                    let tangent = phi.cos() * t + phi.sin() * b;
-                    Ray::new(offset_ray_origin(p, err, n), elev.cos() * tangent + elev.sin() * n)
+                    let local = spherical_direction(elev.cos(), elev.sin(), phi);
+                    Ray::new(offset_ray_origin(p, err, n), Frame::from_z(n).from_local(local))
                 }),
                 RayKind::Shadow => {
                     surf.sample(&mut rng).zip(surf.sample(&mut rng)).and_then(|((p, np, ep), (q, nq, eq))| {
@@ -462,27 +440,60 @@ impl fmt::Display for AgreeReport {
 /// Brute force joins the comparison up to this many triangles × rays.
 pub const NAIVE_BUDGET: u64 = 400_000_000;
 
-/// The agreement of a scene's backends: the main pair (Embree vs BVH when built with Embree,
-/// else BVH vs brute force) at the top level, and each against brute force when the scene is
-/// small enough.
+/// An evenly spread subset of `rays` (every kind in proportion, as [`generate_rays`] groups
+/// them by kind) on which brute force over `triangles` triangles stays within `budget`
+/// triangles × rays: all of them when they fit, none when not even one ray does.
+pub fn within_budget(rays: &[(RayKind, Ray)], triangles: usize, budget: u64) -> Vec<(RayKind, Ray)> {
+    let fit = budget.checked_div(triangles as u64).unwrap_or(u64::MAX);
+    let (len, m) = (rays.len() as u64, (rays.len() as u64).min(fit));
+    (0..m).map(|i| rays[(i * len / m) as usize]).collect()
+}
+
+/// The agreement of a scene's backends: the main pair at the top level, and each backend of
+/// the main pair against brute force when the scene is small enough for it on every ray.
+///
+/// The main pair is Embree against the BVH when built with Embree. Without Embree it is the
+/// BVH against brute force, on every ray when the scene is small enough and otherwise on the
+/// evenly spread subset of them that [`within_budget`] gives for [`NAIVE_BUDGET`] (on none, for
+/// a scene of more triangles than the budget: the check is then not run, and not clean).
 #[derive(Clone, Debug, Serialize)]
 pub struct SceneAgreement {
     #[serde(flatten)]
     pub main: AgreeReport,
     /// The backends against brute force (empty when the scene is too large for it).
     pub against_naive: Vec<AgreeReport>,
+    /// Rays generated; the main comparison cast `main.rays` of them.
+    pub generated_rays: u64,
 }
 
 impl SceneAgreement {
-    /// No disagreement beyond edge ties, in any comparison.
+    /// Whether the main comparison cast any ray.
+    pub fn ran(&self) -> bool {
+        self.main.rays > 0
+    }
+
+    /// The main comparison cast rays and found no disagreement beyond edge ties, and neither
+    /// did any other comparison.
     pub fn clean(&self) -> bool {
-        self.main.clean() && self.against_naive.iter().all(AgreeReport::clean)
+        self.ran() && self.main.clean() && self.against_naive.iter().all(AgreeReport::clean)
     }
 }
 
 impl fmt::Display for SceneAgreement {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "{}", self.main)?;
+        if !self.ran() && self.generated_rays > 0 {
+            writeln!(
+                f,
+                "not run: brute force exceeds its budget of {NAIVE_BUDGET} triangles x rays on one ray"
+            )?;
+        } else if self.main.rays < self.generated_rays {
+            writeln!(
+                f,
+                "(an evenly spread {} of the {} rays: brute force's budget is {NAIVE_BUDGET} triangles x rays)",
+                self.main.rays, self.generated_rays
+            )?;
+        }
         for r in &self.against_naive {
             write!(f, "\n{r}")?;
         }
@@ -498,31 +509,41 @@ pub fn agree_scene(
     seed: u64,
     options: crate::accel::AccelOptions,
 ) -> Result<SceneAgreement, crate::accel::AccelError> {
-    use crate::accel::{bvh::Bvh, naive::Naive};
-    let mesh = &scene.mesh;
-    mesh.validate()?;
     let eye = scene.camera.eye;
     let camera = CameraLike { eye, target: eye + scene.camera.forward };
-    let rays = generate_rays(mesh, Some(camera), n, seed);
+    agree_mesh(&scene.mesh, Some(camera), n, seed, options, NAIVE_BUDGET)
+}
+
+/// [`agree_scene`] on a mesh, with brute force held to `budget` triangles × rays.
+fn agree_mesh(
+    mesh: &TriangleMesh,
+    camera: Option<CameraLike>,
+    n: usize,
+    seed: u64,
+    options: crate::accel::AccelOptions,
+    budget: u64,
+) -> Result<SceneAgreement, crate::accel::AccelError> {
+    use crate::accel::{bvh::Bvh, naive::Naive};
+    mesh.validate()?;
+    let rays = generate_rays(mesh, camera, n, seed);
+    let generated_rays = rays.len() as u64;
     let bvh = Bvh::build(mesh);
-    let naive_ok = mesh.len() as u64 * rays.len() as u64 <= NAIVE_BUDGET;
-    let naive = naive_ok.then(|| Naive::new(mesh));
     #[cfg(feature = "embree")]
     {
+        let naive_ok = mesh.len() as u64 * rays.len() as u64 <= budget;
+        let naive = naive_ok.then(|| Naive::new(mesh));
         let embree = crate::accel::embree::EmbreeAccel::build(mesh, options)?;
         let mut reports =
             compare_with_reference(&embree, &bvh, naive.as_ref().map(|n| n as &dyn Accel), &rays, mesh);
         let main = reports.remove(0);
-        Ok(SceneAgreement { main, against_naive: reports })
+        Ok(SceneAgreement { main, against_naive: reports, generated_rays })
     }
     #[cfg(not(feature = "embree"))]
     {
         let _ = options;
-        let main = match &naive {
-            Some(n) => compare(&bvh, n, &rays, mesh),
-            None => compare(&bvh, &bvh, &rays, mesh),
-        };
-        Ok(SceneAgreement { main, against_naive: Vec::new() })
+        // Never the BVH against itself: brute force, on as many of the rays as the budget allows.
+        let main = compare(&bvh, &Naive::new(mesh), &within_budget(&rays, mesh.len(), budget), mesh);
+        Ok(SceneAgreement { main, against_naive: Vec::new(), generated_rays })
     }
 }
 
@@ -611,5 +632,76 @@ mod tests {
         assert!(json["per_kind"]["camera"]["rays"].as_u64().unwrap() > 0);
         // Empty meshes still get rays (random ones).
         assert_eq!(generate_rays(&TriangleMesh::default(), None, 10, 1).len(), 10);
+    }
+
+    /// Brute force that loses every hit on triangle 0: a backend that is wrong on purpose.
+    struct LosesTriangle0(Naive);
+
+    impl Accel for LosesTriangle0 {
+        fn name(&self) -> &'static str {
+            "loses-triangle-0"
+        }
+
+        fn intersect(&self, ray: &Ray) -> Option<Hit> {
+            self.0.intersect(ray).filter(|h| h.prim != 0)
+        }
+
+        fn occluded(&self, ray: &Ray) -> bool {
+            self.intersect(ray).is_some()
+        }
+    }
+
+    #[test]
+    fn a_wrong_backend_disagrees_and_one_compared_with_itself_never_does() {
+        // A tetrahedron: every kind of ray hits its faces, triangle 0 among them.
+        let m = TriangleMesh {
+            positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z],
+            indices: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+        };
+        let rays = generate_rays(&m, None, 1000, 3);
+        let (naive, wrong) = (Naive::new(&m), LosesTriangle0(Naive::new(&m)));
+        let r = compare(&wrong, &naive, &rays, &m);
+        assert!(!r.clean(), "{r}");
+        assert!(r.hit_miss_disagreements > 20 && r.occlusion_disagreements > 20, "{r}");
+        // The same wrong backend against itself finds nothing: such a check cannot fail.
+        assert!(compare(&wrong, &wrong, &rays, &m).clean());
+    }
+
+    #[test]
+    fn within_budget_spreads_the_subset_over_every_kind() {
+        let rays = generate_rays(&tri(1.0), None, 1000, 5);
+        assert_eq!(within_budget(&rays, 2, 2000), rays);
+        assert_eq!(within_budget(&rays, 0, 0), rays);
+        let sub = within_budget(&rays, 2, 200);
+        assert_eq!(sub.len(), 100);
+        for kind in RayKind::ALL {
+            assert_eq!(sub.iter().filter(|(k, _)| *k == kind).count(), 20, "{kind:?}");
+        }
+        assert!(within_budget(&rays, 2, 1).is_empty());
+    }
+
+    /// However large the scene, the main comparison is of two different backends and casts
+    /// rays, or it is not run and not clean. Without Embree it is the BVH against brute force,
+    /// on a subset of the rays when brute force's budget is short.
+    #[test]
+    fn scene_agreement_never_compares_a_backend_with_itself() {
+        let m = tri(1.0);
+        let options = crate::accel::AccelOptions::default();
+        for budget in [NAIVE_BUDGET, 2 * 100] {
+            let r = agree_mesh(&m, None, 1000, 9, options, budget).unwrap();
+            assert_ne!(r.main.backends[0], r.main.backends[1], "{r}");
+            assert_eq!(r.generated_rays, 1000);
+            assert!(r.ran() && r.clean(), "{r}");
+            if cfg!(not(feature = "embree")) {
+                assert_eq!(r.main.backends, ["bvh", "naive"]);
+                let expected = if budget == NAIVE_BUDGET { 1000 } else { 100 };
+                assert_eq!(r.main.rays, expected, "{r}");
+            }
+        }
+        if cfg!(not(feature = "embree")) {
+            let r = agree_mesh(&m, None, 1000, 9, options, 1).unwrap();
+            assert!(!r.ran() && !r.clean(), "{r}");
+            assert!(r.to_string().contains("not run"), "{r}");
+        }
     }
 }

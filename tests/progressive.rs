@@ -122,7 +122,6 @@ fn ctrl_c_writes_the_image_so_far() {
     let film = Film::read_exr(&out).unwrap();
     assert_eq!((film.width, film.height), (32, 32));
     assert!(film.mean() > 0.05, "{}", film.mean());
-    assert!(start.elapsed() < Duration::from_secs(60));
 }
 
 /// `photonmap converge` renders every method at every budget and writes the table, the CSV

@@ -46,14 +46,6 @@ pub trait Accel: Send + Sync {
             *h = self.intersect(r);
         }
     }
-
-    /// Occlusion of a batch of rays, `blocked[i]` for `rays[i]`.
-    fn occluded_batch(&self, rays: &[Ray], blocked: &mut [bool]) {
-        assert_eq!(rays.len(), blocked.len(), "one slot per ray");
-        for (r, b) in rays.iter().zip(blocked.iter_mut()) {
-            *b = self.occluded(r);
-        }
-    }
 }
 
 crate::choice! {

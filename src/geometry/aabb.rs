@@ -58,16 +58,9 @@ impl Aabb {
         2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
     }
 
-    /// Index of the longest axis.
+    /// Index of the longest axis ([`longest_axis`] of the extent).
     pub fn longest_axis(&self) -> usize {
-        let e = self.extent();
-        if e.x >= e.y && e.x >= e.z {
-            0
-        } else if e.y >= e.z {
-            1
-        } else {
-            2
-        }
+        longest_axis(self.extent())
     }
 
     /// Centre and radius of a sphere that encloses the box.
@@ -77,6 +70,20 @@ impl Aabb {
 
     pub fn contains(&self, p: Vec3) -> bool {
         p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+}
+
+/// Index of the largest component of a box's `extent`: x when it ties with y or z, y when it
+/// ties with z. The BVH builder and the photon kd-tree pick their split axes with it.
+#[inline]
+pub fn longest_axis(extent: Vec3) -> usize {
+    let e = extent;
+    if e.x >= e.y && e.x >= e.z {
+        0
+    } else if e.y >= e.z {
+        1
+    } else {
+        2
     }
 }
 
@@ -93,5 +100,22 @@ mod tests {
         assert_eq!(Aabb::EMPTY.area(), 0.0);
         assert_eq!(Aabb::EMPTY.union(b), b);
         assert!(b.contains(Vec3::new(0.5, 1.0, 1.0)));
+    }
+
+    #[test]
+    fn longest_axis_breaks_ties_towards_x_then_y() {
+        for (e, axis) in [
+            ([3.0, 2.0, 1.0], 0),
+            ([1.0, 3.0, 2.0], 1),
+            ([1.0, 2.0, 3.0], 2),
+            ([2.0, 2.0, 2.0], 0),
+            ([2.0, 2.0, 1.0], 0),
+            ([2.0, 1.0, 2.0], 0),
+            ([1.0, 2.0, 2.0], 1),
+            ([0.0, 0.0, 0.0], 0),
+        ] {
+            assert_eq!(longest_axis(Vec3::from_array(e)), axis, "{e:?}");
+        }
+        assert_eq!(Aabb::EMPTY.longest_axis(), 0);
     }
 }

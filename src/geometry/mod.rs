@@ -10,7 +10,7 @@ mod aabb;
 mod mesh;
 mod ray;
 
-pub use aabb::Aabb;
+pub use aabb::{longest_axis, Aabb};
 pub use mesh::{MeshError, TriangleMesh};
 pub use ray::{
     barycentric_error, gamma, next_float_down, next_float_up, offset_distance, offset_ray_origin, Ray,

@@ -131,6 +131,13 @@ mod tests {
         assert!(next_float_up(-0.0) > 0.0 && next_float_down(0.0) < 0.0);
         assert_eq!(next_float_up(f32::INFINITY), f32::INFINITY);
         assert!(next_float_up(-1.0) > -1.0);
+        // The cases Embree's closed ray interval relies on (`accel::embree`): either zero goes
+        // to the smallest subnormal, an infinite end to the largest finite float, NaN stays NaN.
+        assert_eq!(next_float_up(0.0).to_bits(), 1);
+        assert_eq!(next_float_up(-0.0).to_bits(), 1);
+        assert_eq!(next_float_down(f32::INFINITY), f32::MAX);
+        assert_eq!(next_float_up(f32::NEG_INFINITY), f32::MIN);
+        assert!(next_float_up(f32::NAN).is_nan() && next_float_down(f32::NAN).is_nan());
     }
 
     #[test]

@@ -11,6 +11,7 @@
 //! (the top of the tree, where there is little subtree parallelism) is split into chunks.
 
 use super::node::{leaf_ref, Node4};
+use crate::geometry::longest_axis;
 use glam::Vec3A;
 use rayon::prelude::*;
 
@@ -240,14 +241,7 @@ fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
                 return leaf();
             }
             // Median split along the longest centroid axis (arbitrary if the centroids coincide).
-            let e = cbounds.max - cbounds.min;
-            let axis = if e.x >= e.y && e.x >= e.z {
-                0
-            } else if e.y >= e.z {
-                1
-            } else {
-                2
-            };
+            let axis = longest_axis((cbounds.max - cbounds.min).into());
             prims.select_nth_unstable_by(n / 2, |a, b| a.centroid2()[axis].total_cmp(&b.centroid2()[axis]));
             n / 2
         }

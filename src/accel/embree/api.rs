@@ -63,13 +63,6 @@ impl Query {
         // SAFETY: the caller guarantees scene and mask; `RTCRayHit8` is 32-byte aligned by type.
         unsafe { sys::rtcIntersect8(valid, scene, &mut self.ctx, rh) }
     }
-
-    /// # Safety
-    /// As for [`Query::intersect8`].
-    pub unsafe fn occluded8(&mut self, valid: *const i32, scene: sys::RTCScene, ray: &mut sys::RTCRay8) {
-        // SAFETY: as for `intersect8`.
-        unsafe { sys::rtcOccluded8(valid, scene, &mut self.ctx, ray) }
-    }
 }
 
 /// Per-call query state: Embree 4's ray-query context and argument structs.
@@ -148,13 +141,5 @@ impl Query {
         self.link();
         // SAFETY: the caller guarantees scene and mask; `RTCRayHit8` is 32-byte aligned by type.
         unsafe { sys::rtcIntersect8(valid, scene, rh, &mut self.iargs) }
-    }
-
-    /// # Safety
-    /// As for [`Query::intersect8`].
-    pub unsafe fn occluded8(&mut self, valid: *const i32, scene: sys::RTCScene, ray: &mut sys::RTCRay8) {
-        self.link();
-        // SAFETY: as for `intersect8`.
-        unsafe { sys::rtcOccluded8(valid, scene, ray, &mut self.oargs) }
     }
 }

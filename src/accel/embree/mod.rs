@@ -2,7 +2,7 @@
 //!
 //! This module wraps Embree's C API (`rtcore.h`): devices (`RTCDevice`, `device`), committed
 //! scenes with one shared-buffer triangle geometry (`RTCScene`, `scene`), single-ray queries
-//! (`rtcIntersect1` / `rtcOccluded1`) and 8-wide packets (`rtcIntersect8` / `rtcOccluded8`,
+//! (`rtcIntersect1` / `rtcOccluded1`) and 8-wide packets of closest-hit queries (`rtcIntersect8`,
 //! `packet`). The version differences live in `api`, the raw bindings in `sys`.
 //!
 //! All of the crate's `unsafe` code is in this module; every block states why it is sound.
@@ -69,10 +69,6 @@ impl Accel for EmbreeAccel {
 
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         self.scene.intersect_batch(rays, hits)
-    }
-
-    fn occluded_batch(&self, rays: &[Ray], blocked: &mut [bool]) {
-        self.scene.occluded_batch(rays, blocked)
     }
 }
 

@@ -3,8 +3,8 @@
 //! the single-ray queries `rtcIntersect1` / `rtcOccluded1`.
 //!
 //! **Ray interval.** Embree accepts hits with `tnear <= t <= tfar`; the [`Accel`] contract is
-//! the open interval `(t_min, t_max)`. We pass `tnear = next_up(t_min)` and
-//! `tfar = next_down(t_max)`, the neighbouring floats, which makes the closed interval Embree
+//! the open interval `(t_min, t_max)`. We pass `tnear = next_float_up(t_min)` and
+//! `tfar = next_float_down(t_max)`, the neighbouring floats, which makes the closed interval Embree
 //! tests exactly the open one. One caveat: with denormals-are-zero set (as Embree recommends,
 //! see [`set_flush_denormals`](super::set_flush_denormals)) a subnormal `tnear` would read as
 //! 0, so a positive subnormal `tnear` is raised to `f32::MIN_POSITIVE` (it only drops hits
@@ -16,7 +16,7 @@ use super::api::{Query, INVALID_ID};
 use super::device::Device;
 use super::sys;
 use crate::accel::{AccelError, AccelOptions, BuildQuality, Hit};
-use crate::geometry::{Ray, TriangleMesh};
+use crate::geometry::{next_float_down, next_float_up, Ray, TriangleMesh};
 use std::ffi::c_void;
 use std::sync::Arc;
 
@@ -198,23 +198,10 @@ fn empty_hit() -> sys::RTCHit {
 
 /// Embree's closed `[tnear, tfar]` equal to the ray's open `(t_min, t_max)`, or `None` if empty.
 pub fn interval(ray: &Ray) -> Option<(f32, f32)> {
-    let mut tnear = next_up(ray.t_min);
+    let mut tnear = next_float_up(ray.t_min);
     if tnear > 0.0 && tnear < f32::MIN_POSITIVE {
         tnear = f32::MIN_POSITIVE; // a subnormal would read as 0 under denormals-are-zero
     }
-    let tfar = -next_up(-ray.t_max);
+    let tfar = next_float_down(ray.t_max);
     (tnear <= tfar).then_some((tnear, tfar))
-}
-
-/// The smallest float greater than `x` (`f32::next_up`, stable only since Rust 1.86).
-fn next_up(x: f32) -> f32 {
-    if x.is_nan() || x == f32::INFINITY {
-        x
-    } else if x == 0.0 {
-        f32::from_bits(1)
-    } else if x > 0.0 {
-        f32::from_bits(x.to_bits() + 1)
-    } else {
-        f32::from_bits(x.to_bits() - 1)
-    }
 }

@@ -60,7 +60,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::geometry::Aabb;
+use crate::geometry::{longest_axis, Aabb};
 
 pub use query::flattened_metric;
 
@@ -168,11 +168,6 @@ impl<T> KdTree<T> {
         &self.items[index as usize]
     }
 
-    /// Gives the items back, in tree order.
-    pub fn into_items(self) -> Vec<T> {
-        self.items
-    }
-
     /// Tight bounding box of all items ([`Aabb::EMPTY`] for an empty tree).
     #[inline]
     pub fn bounds(&self) -> Aabb {
@@ -243,13 +238,7 @@ fn build_rec<T: KdPoint + Send + Sync>(items: &mut [T], id: usize, bounds: Aabb,
         set_code(codes, id, CODE_DEGENERATE);
         return;
     }
-    let axis = if e.x >= e.y && e.x >= e.z {
-        0
-    } else if e.y >= e.z {
-        1
-    } else {
-        2
-    };
+    let axis = longest_axis(e);
     set_code(codes, id, axis as u8);
     let mid = n / 2;
     items.select_nth_unstable_by(mid, |a, b| a.position()[axis].total_cmp(&b.position()[axis]));
