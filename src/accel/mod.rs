@@ -72,29 +72,16 @@ impl AccelKind {
     }
 }
 
-/// Build-time trade-off between build speed and trace speed.
-#[derive(
-    Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum, serde::Deserialize, serde::Serialize,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum BuildQuality {
-    Low,
-    #[default]
-    Medium,
-    High,
-}
-
 /// Options shared by the backends. The BVH's triangle test is always watertight, so `robust`
 /// only changes Embree (its `RTC_SCENE_FLAG_ROBUST`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct AccelOptions {
-    pub quality: BuildQuality,
     pub robust: bool,
 }
 
 impl Default for AccelOptions {
     fn default() -> Self {
-        AccelOptions { quality: BuildQuality::Medium, robust: true }
+        AccelOptions { robust: true }
     }
 }
 

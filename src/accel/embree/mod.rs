@@ -44,8 +44,8 @@ pub struct EmbreeAccel {
 
 impl EmbreeAccel {
     /// Validates `mesh` (Embree itself does not check indices), copies its vertices and
-    /// indices into buffers shared with Embree, and commits a scene with the requested build
-    /// quality and, if `options.robust`, `RTC_SCENE_FLAG_ROBUST`. An empty mesh gives an empty
+    /// indices into buffers shared with Embree, and commits a scene at Embree's medium build
+    /// quality with, if `options.robust`, `RTC_SCENE_FLAG_ROBUST`. An empty mesh gives an empty
     /// scene that every ray misses.
     pub fn build(mesh: &TriangleMesh, options: AccelOptions) -> Result<EmbreeAccel, AccelError> {
         let device = Arc::new(Device::new(DEVICE_CONFIG)?);

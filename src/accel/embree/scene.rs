@@ -15,7 +15,7 @@
 use super::api::{Query, INVALID_ID};
 use super::device::Device;
 use super::sys;
-use crate::accel::{AccelError, AccelOptions, BuildQuality, Hit};
+use crate::accel::{AccelError, AccelOptions, Hit};
 use crate::geometry::{next_float_down, next_float_up, Ray, TriangleMesh};
 use std::ffi::c_void;
 use std::sync::Arc;
@@ -40,13 +40,9 @@ unsafe impl Send for Scene {}
 // SAFETY: as above.
 unsafe impl Sync for Scene {}
 
-fn quality(q: BuildQuality) -> sys::RTCBuildQuality {
-    match q {
-        BuildQuality::Low => sys::RTC_BUILD_QUALITY_LOW,
-        BuildQuality::Medium => sys::RTC_BUILD_QUALITY_MEDIUM,
-        BuildQuality::High => sys::RTC_BUILD_QUALITY_HIGH,
-    }
-}
+/// The build quality of every scene and its geometry: Embree's default (medium) trade-off
+/// between build and trace speed.
+const QUALITY: sys::RTCBuildQuality = sys::RTC_BUILD_QUALITY_MEDIUM;
 
 impl Scene {
     /// Builds and commits a scene for `mesh`. The mesh is validated here, next to the unsafe
@@ -75,11 +71,11 @@ impl Scene {
         // SAFETY: `raw` is a live, not yet committed scene.
         unsafe {
             sys::rtcSetSceneFlags(raw, flags);
-            sys::rtcSetSceneBuildQuality(raw, quality(options.quality));
+            sys::rtcSetSceneBuildQuality(raw, QUALITY);
         }
         scene.device.check("scene flags and build quality")?;
         if !mesh.is_empty() {
-            scene.attach_triangles(mesh.positions.len(), mesh.len(), options)?;
+            scene.attach_triangles(mesh.positions.len(), mesh.len())?;
         }
         // SAFETY: `raw` is live and its geometry's buffers are owned by `scene`.
         unsafe { sys::rtcCommitScene(raw) };
@@ -88,12 +84,7 @@ impl Scene {
     }
 
     /// Creates the triangle geometry over the scene's own buffers and attaches it.
-    fn attach_triangles(
-        &self,
-        vertex_count: usize,
-        triangle_count: usize,
-        options: AccelOptions,
-    ) -> Result<(), AccelError> {
+    fn attach_triangles(&self, vertex_count: usize, triangle_count: usize) -> Result<(), AccelError> {
         let device = &self.device;
         // SAFETY: the device is live.
         let geom = unsafe { sys::rtcNewGeometry(device.raw(), sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
@@ -129,7 +120,7 @@ impl Scene {
             );
             // Embree 4's default geometry mask is 1 (Embree 3's all ones): set it explicitly.
             sys::rtcSetGeometryMask(geom, u32::MAX);
-            sys::rtcSetGeometryBuildQuality(geom, quality(options.quality));
+            sys::rtcSetGeometryBuildQuality(geom, QUALITY);
             sys::rtcCommitGeometry(geom);
             sys::rtcAttachGeometry(self.raw, geom);
             sys::rtcReleaseGeometry(geom);
