@@ -244,7 +244,7 @@ fn main() {
     #[cfg(feature = "embree")]
     let (embree, embree_fast) = {
         let robust = AccelOptions::default();
-        let fast = AccelOptions { robust: false, ..robust };
+        let fast = AccelOptions { robust: false };
         (EmbreeAccel::build(&small, robust).unwrap(), EmbreeAccel::build(&small, fast).unwrap())
     };
 

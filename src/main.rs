@@ -154,7 +154,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
 
 fn agree(args: cli::AgreeArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
-    let options = AccelOptions { robust: args.robust, ..Default::default() };
+    let options = AccelOptions { robust: args.robust };
     let report = photonmap::agree::agree_scene(&scene, args.rays, args.seed, options)?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);

@@ -96,7 +96,7 @@ impl<'s> Prepared<'s> {
             None => Cow::Borrowed(scene),
         };
         let mut stats = Stats::default();
-        let options = AccelOptions { robust: cfg.robust, ..Default::default() };
+        let options = AccelOptions { robust: cfg.robust };
         let reason =
             format!("{:?} over {} triangles (the only ray caster built)", cfg.accel, scene.mesh.len());
         let accel = stats.run("accel", reason, |_| AnyAccel::build(cfg.accel, &scene.mesh, options))?;
