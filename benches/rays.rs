@@ -25,9 +25,9 @@
 use criterion::{BenchmarkId, Criterion, Throughput};
 use photonmap::accel::bvh::Bvh;
 use photonmap::accel::{init_tracing_thread, Accel, Hit};
-use photonmap::agree::{generate_rays, CameraLike, RayKind};
-use photonmap::bench::median;
 use photonmap::geometry::{Ray, TriangleMesh, Vec3};
+use photonmap::tools::agree::{generate_rays, CameraLike, RayKind};
+use photonmap::tools::bench::median;
 use rayon::prelude::*;
 use std::hint::black_box;
 use std::time::{Duration, Instant};

@@ -19,12 +19,12 @@
 //! Environment: `SAVINGS_SUMMARY_ONLY=1` skips criterion and prints only the summary table.
 
 use criterion::Criterion;
-use photonmap::bench::median;
 use photonmap::config::{CausticPass, Component, RenderSettings};
 use photonmap::film::{compare, Film};
 use photonmap::frame::Quiet;
 use photonmap::integrator::{render_scene, RenderOutput};
 use photonmap::scene::Scene;
+use photonmap::tools::bench::median;
 use std::path::Path;
 use std::time::Duration;
 

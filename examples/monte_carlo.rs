@@ -9,7 +9,9 @@
 //! for `∫₀¹ x² dx` at N = 100 with `p(x) = 1, 2x, 3x²`; (c) the RMS error of the π estimator
 //! against N and the fitted log-log slope (≈ −0.5, the `1/√N` law).
 
-use photonmap::montecarlo::{estimate_pi, integrate_x2, loglog_slope, rms_error_vs_n, Pdf, X2_INTEGRAL};
+use photonmap::tools::montecarlo::{
+    estimate_pi, integrate_x2, loglog_slope, rms_error_vs_n, Pdf, X2_INTEGRAL,
+};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use std::f64::consts::PI;

@@ -196,8 +196,8 @@ pub struct ConvergeArgs {
     #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32")]
     pub budgets: Vec<f64>,
     /// Methods to compare [default: all].
-    #[arg(long, value_parser = choice::<photonmap::converge::Method>(), value_delimiter = ',')]
-    pub methods: Vec<photonmap::converge::Method>,
+    #[arg(long, value_parser = choice::<photonmap::tools::converge::Method>(), value_delimiter = ',')]
+    pub methods: Vec<photonmap::tools::converge::Method>,
     /// Write the points as CSV here.
     #[arg(long)]
     pub csv: Option<PathBuf>,

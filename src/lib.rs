@@ -1,9 +1,23 @@
 //! photonmap: a photon-mapping renderer (Jensen's two-pass method) with Debian's Embree or a
 //! pure-Rust BVH for ray casting.
 //!
-//! Layout: [`geometry`] (rays, boxes, meshes, robust offsets), [`accel`] (ray-casting backends
-//! behind one trait), [`scene`] (TOML scene files with OBJ/MTL geometry), [`material`] and
-//! [`light`] (what surfaces and emitters do).
+//! Layout, from the bottom up (each layer imports only those below it; `docs/ARCHITECTURE.md`
+//! draws it):
+//!
+//! * [`geometry`] (rays, boxes, meshes, robust offsets), [`sampling`] (warps, distributions,
+//!   low-discrepancy sequences, seeds), [`choice`] (enums chosen by name), [`film`] (images,
+//!   EXR/PNG, error metrics), [`stats`] (what a render reports);
+//! * [`accel`] (ray casting: Embree, the BVH, brute force, behind one trait), [`material`],
+//!   [`light`] (the lights and the [`light::LightSet`] renders sample), [`config`] (settings
+//!   resolved into a per-integrator config), [`scene`] (TOML scene files with OBJ/MTL
+//!   geometry);
+//! * [`frame`]: what the photon pass and every integrator stand on (scene, accelerator and
+//!   lights together, surface hits, camera samples, the specular walk, direct light);
+//! * [`photon`]: the photon pass, the photon maps and their kd-tree, precomputed irradiance;
+//! * [`integrator`]: two-pass photon mapping, progressive photon mapping, the path tracer, and
+//!   the pass loop they share;
+//! * [`tools`]: what measures the renderer (agreement of backends, stress suite, error against
+//!   time, speed, the lecture's Monte Carlo examples).
 //!
 //! All `unsafe` code lives in `accel::embree`; everything else is safe Rust.
 #![deny(unsafe_code)]
@@ -11,21 +25,16 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
-pub mod agree;
-pub mod bench;
 pub mod choice;
 pub mod config;
-pub mod converge;
 pub mod film;
 pub mod frame;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
 pub mod material;
-pub mod montecarlo;
 pub mod photon;
-pub mod plot;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
-pub mod stress;
+pub mod tools;

@@ -1,4 +1,6 @@
-//! The `photonmap` command: render, agree, compare, converge, stress, info.
+//! The `photonmap` command: render, compare, agree, converge, stress, bench, info. `cli` holds
+//! the flags (clap lives here, not in the library), `progress` the terminal's progress bars;
+//! everything else is the library's.
 
 mod cli;
 mod progress;
@@ -116,8 +118,8 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     let mut output = pool.install(|| match args.stats {
         // With --stats, a short measurement of the accelerator alone follows the render.
         Some(_) => {
-            let rays = photonmap::bench::STATS_CALIBRATION_RAYS;
-            photonmap::bench::render_calibrated(&scene, &cfg, &progress, control, rays)
+            let rays = photonmap::tools::bench::STATS_CALIBRATION_RAYS;
+            photonmap::tools::bench::render_calibrated(&scene, &cfg, &progress, control, rays)
         }
         None => integrator::render_scene_with(&scene, &cfg, &progress, control),
     })?;
@@ -155,7 +157,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
 fn agree(args: cli::AgreeArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let options = AccelOptions { robust: args.robust };
-    let report = photonmap::agree::agree_scene(&scene, args.rays, args.seed, options)?;
+    let report = photonmap::tools::agree::agree_scene(&scene, args.rays, args.seed, options)?;
     if args.json {
         println!("{}", serde_json::to_string(&report)?);
     } else {
@@ -213,8 +215,8 @@ fn compare(
 
 fn converge(args: cli::ConvergeArgs) -> Result<()> {
     use photonmap::choice::Choice;
-    use photonmap::converge::{self, Method, Study};
     use photonmap::film::Film;
+    use photonmap::tools::converge::{self, Method, Study};
     let scene = Scene::load(&args.scene)?;
     let mut reference = Film::read_exr(&args.reference)?;
     if let Some(f) = args.downsample {
@@ -282,7 +284,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
 }
 
 fn stress(args: cli::StressArgs) -> Result<()> {
-    use photonmap::stress;
+    use photonmap::tools::stress;
     let mut opts =
         stress::StressOptions { agree_rays: args.agree_rays, quick: args.quick, ..Default::default() };
     if !args.accel.is_empty() {
@@ -318,7 +320,7 @@ fn stress(args: cli::StressArgs) -> Result<()> {
 }
 
 fn bench(args: cli::BenchArgs) -> Result<()> {
-    use photonmap::bench::{self, BenchSpec};
+    use photonmap::tools::bench::{self, BenchSpec};
     let scene = Scene::load(&args.scene)?;
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let cfg = settings

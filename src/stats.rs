@@ -85,7 +85,7 @@ pub struct Stats {
     pub rays_to_raw_ratio: f64,
 }
 
-/// Ray rates of the accelerator alone, by kind of ray (rays/s), from [`crate::bench::raw_rays`].
+/// Ray rates of the accelerator alone, by kind of ray (rays/s), from [`crate::tools::bench::raw_rays`].
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct RawRays {
     /// The scene's camera rays, one batch per pixel as the camera pass traces them.

@@ -3,8 +3,8 @@
 use photonmap::accel::bvh::Bvh;
 use photonmap::accel::naive::Naive;
 use photonmap::accel::Accel;
-use photonmap::agree::{compare, generate_rays, AgreeReport, CameraLike};
 use photonmap::geometry::{Ray, TriangleMesh, Vec3};
+use photonmap::tools::agree::{compare, generate_rays, AgreeReport, CameraLike};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use rayon::prelude::*;

@@ -3,18 +3,18 @@
 //! and degenerate triangles. `tests/agree_bvh.rs` covers the BVH against brute force alone.
 //!
 //! Every comparison must be free of hit/miss, primitive and occlusion disagreements: the only
-//! differences allowed are edge/coplanar ties as classified by [`photonmap::agree::classify`].
+//! differences allowed are edge/coplanar ties as classified by [`photonmap::tools::agree::classify`].
 //! Ties are bounded per case (see [`Limits`]), and so is the relative distance error on camera
 //! rays. Without the `embree` feature the same cases run the BVH against brute force.
 //!
 //! With the `embree` feature on, failing to build Embree fails the tests; nothing is skipped.
 
 use photonmap::accel::{Accel, AccelKind, AccelOptions, AnyAccel};
-use photonmap::agree::{
-    agree_scene, classify_ray, compare, generate_rays, AgreeReport, CameraLike, RayKind, Verdict,
-};
 use photonmap::geometry::{Ray, TriangleMesh, Vec3};
 use photonmap::scene::Scene;
+use photonmap::tools::agree::{
+    agree_scene, classify_ray, compare, generate_rays, AgreeReport, CameraLike, RayKind, Verdict,
+};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use std::path::{Path, PathBuf};
@@ -209,7 +209,7 @@ fn check_scene(case: &str, scene: &Scene, n: usize, limits: Limits) {
     for r in &agreement.against_naive {
         check_report(case, r, limits, culprit(&r.backends));
     }
-    let with_naive = scene.mesh.len() as u64 * n as u64 <= photonmap::agree::NAIVE_BUDGET;
+    let with_naive = scene.mesh.len() as u64 * n as u64 <= photonmap::tools::agree::NAIVE_BUDGET;
     if cfg!(feature = "embree") && with_naive {
         assert_eq!(agreement.against_naive.len(), 2, "{case}: brute force should have joined");
     }

@@ -1,6 +1,8 @@
-//! Properties of the lecture's Monte Carlo examples (`photonmap::montecarlo`).
+//! Properties of the lecture's Monte Carlo examples (`photonmap::tools::montecarlo`).
 
-use photonmap::montecarlo::{estimate_pi, integrate_x2, loglog_slope, rms_error_vs_n, Pdf, X2_INTEGRAL};
+use photonmap::tools::montecarlo::{
+    estimate_pi, integrate_x2, loglog_slope, rms_error_vs_n, Pdf, X2_INTEGRAL,
+};
 use rand::SeedableRng;
 use rand_pcg::Pcg64;
 use std::f64::consts::PI;

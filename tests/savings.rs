@@ -3,7 +3,6 @@
 //! estimate as aimed ones, and the raw ray rates of `--stats` and `photonmap bench`.
 
 use photonmap::accel::{AccelKind, AccelOptions, AnyAccel};
-use photonmap::bench::render_calibrated;
 use photonmap::config::{CausticPass, Component, RenderSettings};
 use photonmap::frame::Quiet;
 use photonmap::integrator::{render_scene, Control, RenderOutput};
@@ -11,6 +10,7 @@ use photonmap::light::LightSet;
 use photonmap::photon::trace::{self, Pass, PassSpec};
 use photonmap::scene::Scene;
 use photonmap::stats::Stage;
+use photonmap::tools::bench::render_calibrated;
 use std::path::Path;
 #[allow(dead_code)] // the reference images are not needed here
 mod common;

@@ -1,10 +1,10 @@
-//! The stress suite (`photonmap::stress`, also `photonmap stress`): every case on
+//! The stress suite (`photonmap::tools::stress`, also `photonmap stress`): every case on
 //! every backend, in its quick form (fewer samples and photons; the same scenes, bounds and
 //! agreement checks), and every row must pass. Also: Embree gives the same hits on the same
 //! rays in two runs (the thread-count determinism of the renders is in `tests/accuracy.rs`,
 //! `tests/path_tracer.rs` and `tests/progressive.rs`).
 
-use photonmap::stress::{self, StressOptions};
+use photonmap::tools::stress::{self, StressOptions};
 
 /// Runs the case called `name` and fails with the table of its rows if any fails.
 fn check(name: &str) {
@@ -215,11 +215,11 @@ fn furnace_far_from_the_origin_renders_as_at_the_origin() {
 fn embree_gives_the_same_hits_on_the_same_rays_every_run() {
     use photonmap::accel::embree::EmbreeAccel;
     use photonmap::accel::{Accel, AccelKind, AccelOptions};
-    use photonmap::agree::generate_rays;
     use photonmap::config::RenderSettings;
     use photonmap::frame::Quiet;
     use photonmap::geometry::Ray;
     use photonmap::integrator::render_scene;
+    use photonmap::tools::agree::generate_rays;
     let scene = stress::scenes::furnace(1.0, photonmap::geometry::Vec3::splat(1e5));
     let mesh = photonmap::geometry::TriangleMesh::parametric_sphere(64, 128, |t, p| {
         photonmap::geometry::Vec3::new(t.sin() * p.cos(), t.cos(), t.sin() * p.sin())

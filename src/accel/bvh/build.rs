@@ -215,15 +215,15 @@ fn partition(prims: &mut [PrimRef], left: impl Fn(&PrimRef) -> bool) -> usize {
 }
 
 /// The build's intermediate tree, flattened afterwards into depth-first order.
-enum Tmp {
+enum BuildNode {
     Leaf { bounds: Box3, first: u32, count: u32 },
-    Inner { bounds: Box3, kids: Box<(Tmp, Tmp)> },
+    Inner { bounds: Box3, kids: Box<(BuildNode, BuildNode)> },
 }
 
-fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
+fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> BuildNode {
     let n = prims.len();
     let (bounds, cbounds) = bounds_of(prims);
-    let leaf = || Tmp::Leaf { bounds, first, count: n as u32 };
+    let leaf = || BuildNode::Leaf { bounds, first, count: n as u32 };
     if n <= 1 {
         return leaf();
     }
@@ -254,13 +254,13 @@ fn build_rec(prims: &mut [PrimRef], first: u32, depth: u32) -> Tmp {
     } else {
         (build_rec(l, first, depth + 1), build_rec(r, rfirst, depth + 1))
     };
-    Tmp::Inner { bounds, kids: Box::new(kids) }
+    BuildNode::Inner { bounds, kids: Box::new(kids) }
 }
 
-impl Tmp {
+impl BuildNode {
     fn bounds(&self) -> &Box3 {
         match self {
-            Tmp::Leaf { bounds, .. } | Tmp::Inner { bounds, .. } => bounds,
+            BuildNode::Leaf { bounds, .. } | BuildNode::Inner { bounds, .. } => bounds,
         }
     }
 }
@@ -276,23 +276,23 @@ pub struct Flat {
 /// Collapses the binary tree into 4-wide nodes: a node's children are found by repeatedly
 /// opening the interior child of largest surface area until there are four (or only leaves).
 /// Every 4-wide level consumes at least one binary level, so the depth does not grow.
-fn fill(ni: usize, mut kids: Vec<Tmp>, prims: &[PrimRef], flat: &mut Flat) {
+fn fill(ni: usize, mut kids: Vec<BuildNode>, prims: &[PrimRef], flat: &mut Flat) {
     while kids.len() < 4 {
         let widest = kids
             .iter()
             .enumerate()
-            .filter(|(_, k)| matches!(k, Tmp::Inner { .. }))
+            .filter(|(_, k)| matches!(k, BuildNode::Inner { .. }))
             .max_by(|a, b| a.1.bounds().half_area().total_cmp(&b.1.bounds().half_area()))
             .map(|(i, _)| i);
         let Some(i) = widest else { break };
-        let Tmp::Inner { kids: k, .. } = kids.swap_remove(i) else { unreachable!("filtered above") };
+        let BuildNode::Inner { kids: k, .. } = kids.swap_remove(i) else { unreachable!("filtered above") };
         let (l, r) = *k;
         kids.push(l);
         kids.push(r);
     }
     for (slot, k) in kids.into_iter().enumerate() {
         match k {
-            Tmp::Leaf { bounds, first, count } => {
+            BuildNode::Leaf { bounds, first, count } => {
                 let p0 = flat.packets.len();
                 let tris = &prims[first as usize..(first + count) as usize];
                 for c in tris.chunks(4) {
@@ -301,7 +301,7 @@ fn fill(ni: usize, mut kids: Vec<Tmp>, prims: &[PrimRef], flat: &mut Flat) {
                 let r = leaf_ref(p0 as u32, (flat.packets.len() - p0) as u32);
                 flat.nodes[ni].set(slot, bounds.to_aabb(), r);
             }
-            Tmp::Inner { bounds, kids, .. } => {
+            BuildNode::Inner { bounds, kids, .. } => {
                 let ci = flat.nodes.len();
                 flat.nodes.push(Node4::default());
                 let (l, r) = *kids;
@@ -322,8 +322,8 @@ pub fn build(prims: &mut [PrimRef]) -> Option<Flat> {
         Flat { nodes: Vec::with_capacity(prims.len() / 4), packets: Vec::with_capacity(prims.len() / 3) };
     flat.nodes.push(Node4::default());
     let kids = match tree {
-        leaf @ Tmp::Leaf { .. } => vec![leaf],
-        Tmp::Inner { kids, .. } => {
+        leaf @ BuildNode::Leaf { .. } => vec![leaf],
+        BuildNode::Inner { kids, .. } => {
             let (l, r) = *kids;
             vec![l, r]
         }

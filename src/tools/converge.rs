@@ -1,6 +1,6 @@
 //! Error against time: `photonmap converge` renders a scene with several methods at several
 //! time budgets, measures each image against a reference (RMSE and relative MSE over all
-//! pixels and channels), and reports a table, CSV and a log-log plot ([`crate::plot`]).
+//! pixels and channels), and reports a table, CSV and a log-log plot ([`crate::tools::plot`]).
 //!
 //! Every method runs with `--time budget`: the progressive ones (progressive photon mapping,
 //! the path tracer) refine one image, the two-pass photon-mapping methods average passes of a
@@ -292,10 +292,10 @@ pub fn race_row(r: &Race<'_>) -> String {
 /// The log-log plot of RMSE against seconds, one line per method, and one dashed line per
 /// peer renderer.
 pub fn plot(points: &[Point], peers: &[Peer], title: &str) -> String {
-    let mut series: Vec<crate::plot::Series> = Method::ALL
+    let mut series: Vec<crate::tools::plot::Series> = Method::ALL
         .iter()
         .filter(|&&m| points.iter().any(|p| p.method == m))
-        .map(|&m| crate::plot::Series {
+        .map(|&m| crate::tools::plot::Series {
             name: match slope(points, m) {
                 Some(s) => format!("{} (slope {s:.2})", m.name()),
                 None => m.name().to_string(),
@@ -307,13 +307,13 @@ pub fn plot(points: &[Point], peers: &[Peer], title: &str) -> String {
     let mut names: Vec<&str> = peers.iter().map(|p| p.renderer.as_str()).collect();
     names.dedup();
     for name in names {
-        series.push(crate::plot::Series {
+        series.push(crate::tools::plot::Series {
             name: name.to_string(),
             points: peers.iter().filter(|p| p.renderer == name).map(|p| (p.seconds, p.rmse)).collect(),
             dashed: true,
         });
     }
-    crate::plot::log_log_svg(title, "seconds", "RMSE", &series)
+    crate::tools::plot::log_log_svg(title, "seconds", "RMSE", &series)
 }
 
 #[cfg(test)]

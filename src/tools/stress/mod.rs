@@ -9,7 +9,7 @@
 //! a million photons on one point (the kd-tree with duplicates), a scene where no photon is
 //! stored, one triangle, and a million slivers. Every render must report no non-finite sample
 //! and no non-finite pixel, and for every scene Embree and the BVH must agree on the rays of
-//! [`agree_scene`](crate::agree::agree_scene) (no hit/miss, primitive or occlusion
+//! [`agree_scene`](crate::tools::agree::agree_scene) (no hit/miss, primitive or occlusion
 //! disagreement outside ties).
 //!
 //! [`run`] gives one [`Row`] per check; `photonmap stress` prints them as a table and
@@ -179,7 +179,7 @@ fn row(
 }
 
 /// The agreement row of a scene: Embree against the BVH on the rays of
-/// [`agree_scene`](crate::agree::agree_scene); without Embree the BVH against brute force, on
+/// [`agree_scene`](crate::tools::agree::agree_scene); without Embree the BVH against brute force, on
 /// as many of those rays as brute force's budget allows (a scene too large for even one ray
 /// fails the row as not run).
 fn agreement(case: &str, scene: &Scene, opts: &StressOptions) -> Option<Row> {
@@ -188,7 +188,7 @@ fn agreement(case: &str, scene: &Scene, opts: &StressOptions) -> Option<Row> {
     }
     let pair = if cfg!(feature = "embree") { "embree=bvh" } else { "bvh=naive" };
     Some(row(case, pair, "backends agree (outside ties)", "0 disagreements".into(), |_| {
-        let r = crate::agree::agree_scene(scene, opts.agree_rays, 1, AccelOptions::default())?;
+        let r = crate::tools::agree::agree_scene(scene, opts.agree_rays, 1, AccelOptions::default())?;
         let m = &r.main;
         if !r.ran() {
             let why = format!("not run: {} triangles, too many for brute force", scene.mesh.len());
