@@ -1,4 +1,7 @@
 //! The cases of the stress suite and the reasoning behind each expected value and bound.
+//!
+//! (One file of about 450 lines on purpose: each case is a short function whose comment derives
+//! its bound, and reading them side by side is how the suite is reviewed.)
 
 use super::scenes::{self, PLANE_ALBEDO};
 use super::{agreement, row, Case, Probe, Row, StressError, StressOptions};
