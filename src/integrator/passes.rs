@@ -137,7 +137,8 @@ pub struct Control<'a> {
     /// When set (by a Ctrl-C handler, say), no further pass starts; the image of the passes
     /// done is returned.
     pub cancel: Option<&'a AtomicBool>,
-    /// `(k, f)`: `f` gets the image so far after every `k`-th pass (not after the last).
+    /// `(k, f)`: `f` gets the image so far after every `k`-th pass (not after the last of a
+    /// fixed pass count, whose image the render returns).
     pub checkpoint: Option<(u32, Checkpoint<'a>)>,
     /// When the time budget started (the process start, for `photonmap render`).
     pub started: Instant,
@@ -243,7 +244,9 @@ impl<'a> Schedule<'a> {
         let seconds = self.pass_start.take().map_or(0.0, |s| s.elapsed().as_secs_f64());
         self.pass_seconds += seconds;
         self.done += 1;
-        let due = self.control.checkpoint.is_some_and(|(k, _)| k > 0 && self.done % k == 0);
+        // Not after the last of a fixed number of passes: the render's own image follows.
+        let last = self.passes == Some(self.done);
+        let due = !last && self.control.checkpoint.is_some_and(|(k, _)| k > 0 && self.done % k == 0);
         (self.progress_units(seconds), due)
     }
 
@@ -306,5 +309,48 @@ mod tests {
             }
         }
         assert_eq!(*seen.lock().unwrap(), vec![2, 4, 6]);
+    }
+
+    /// A stand-in integrator: pass `i` renders every pixel as `i + 1` and records the pass it
+    /// saw; `finish` adds 100, as progressive photon mapping adds its photon term.
+    struct Counting {
+        seen: Vec<(u32, u64, u64)>,
+    }
+
+    impl PassRenderer for Counting {
+        fn render_pass(&mut self, pass: &Pass, _: &mut Stats, _: &dyn Progress) -> (Film, Counters) {
+            self.seen.push((pass.index, pass.samples.first, pass.seed));
+            let mut film = Film::new(4, 4);
+            film.pixels.iter_mut().for_each(|p| *p = glam::Vec3::splat((pass.index + 1) as f32));
+            (film, Counters { queries: 1, ..Default::default() })
+        }
+
+        fn finish(&self, mean: Film, _passes: u32) -> Film {
+            Film { pixels: mean.pixels.iter().map(|p| *p + 100.0).collect(), ..mean }
+        }
+    }
+
+    #[test]
+    fn the_loop_averages_the_passes_and_lets_the_integrator_finish() {
+        let shown = std::sync::Mutex::new(Vec::new());
+        let f = |n: u32, film: &Film| shown.lock().unwrap().push((n, film.pixels[0].x));
+        let control = Control { checkpoint: Some((2, &f)), ..Default::default() };
+        let c = cfg(Some(4), None);
+        let mut stats = Stats::default();
+        let mut integrator = Counting { seen: Vec::new() };
+        let (film, counters) = super::run(&c, control, &Quiet, &mut stats, &mut integrator);
+        // Passes 1..=4 average to 2.5; the integrator's finish is applied to the image and to
+        // every checkpoint (after 2 passes: mean 1.5).
+        assert!(film.pixels.iter().all(|p| *p == glam::Vec3::splat(102.5)), "{:?}", film.pixels[0]);
+        assert_eq!(*shown.lock().unwrap(), vec![(2, 101.5)]);
+        assert_eq!((stats.passes, counters.queries), (4, 4));
+        // Each pass continues the pixels' sample sequences and has its own seed; the first
+        // pass has the render's own.
+        let spp = c.spp as u64;
+        let firsts: Vec<u64> = integrator.seen.iter().map(|s| s.1).collect();
+        assert_eq!(firsts, vec![0, spp, 2 * spp, 3 * spp]);
+        assert_eq!(integrator.seen[0].2, c.seed);
+        let seeds: std::collections::BTreeSet<u64> = integrator.seen.iter().map(|s| s.2).collect();
+        assert_eq!(seeds.len(), 4);
     }
 }

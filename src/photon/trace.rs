@@ -247,8 +247,9 @@ pub fn trace_pass<A: Accel>(
             let mut out = vec![Vec::new(); n_maps];
             let (mut rays, mut paths) = (0u64, 0u64);
             let e = &emitters[share.emitter];
+            let strata = Strata::new(share.count);
             for i in start..end {
-                let u_pos = stratum(i, share.count, &mut rng);
+                let u_pos = strata.sample(i, &mut rng);
                 let Some(em) = lights.sample_emission(e, u_pos, [rng.gen(), rng.gen()]) else { continue };
                 if pass == Pass::Caustic && aim && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
                     continue;
@@ -337,18 +338,30 @@ fn trace_photon<A: Accel>(
     rays
 }
 
-/// Position sample `i` of `n` on an emitter: jittered cells of an `m × m` grid (`m² <= n`),
-/// the remainder uniformly random.
-#[inline]
-fn stratum(i: u64, n: u64, rng: &mut Pcg32) -> [f32; 2] {
-    let m = (n as f64).sqrt() as u64;
-    if i < m * m {
-        let (cx, cy) = (i % m, i / m);
-        [(cx as f32 + rng.gen::<f32>()) / m as f32, (cy as f32 + rng.gen::<f32>()) / m as f32]
-    } else {
-        [rng.gen(), rng.gen()]
+/// The position samples of `n` photons on an emitter: jittered cells of an `m × m` grid
+/// (`m² <= n`), the remainder uniformly random.
+#[derive(Clone, Copy, Debug)]
+struct Strata {
+    side: u64,
+}
+
+impl Strata {
+    fn new(n: u64) -> Self {
+        Strata { side: (n as f64).sqrt() as u64 }
     }
-    .map(|u: f32| u.min(1.0 - f32::EPSILON / 2.0))
+
+    /// Position sample `i`.
+    #[inline]
+    fn sample(&self, i: u64, rng: &mut Pcg32) -> [f32; 2] {
+        let m = self.side;
+        if i < m * m {
+            let (cx, cy) = (i % m, i / m);
+            [(cx as f32 + rng.gen::<f32>()) / m as f32, (cy as f32 + rng.gen::<f32>()) / m as f32]
+        } else {
+            [rng.gen(), rng.gen()]
+        }
+        .map(|u: f32| u.min(1.0 - f32::EPSILON / 2.0))
+    }
 }
 
 /// Fraction of emission samples that meet a specular target, estimated from `tries` samples
@@ -363,9 +376,10 @@ pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed
     let (shares, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
     let (mut accepted, mut total) = (0u64, 0u64);
     for share in &shares {
+        let strata = Strata::new(share.count);
         for i in 0..share.count {
             total += 1;
-            let u_pos = stratum(i, share.count, &mut rng);
+            let u_pos = strata.sample(i, &mut rng);
             if let Some(em) = lights.sample_emission(&emitters[share.emitter], u_pos, [rng.gen(), rng.gen()])
             {
                 accepted += u64::from(targets.iter().any(|t| t.hit_by(em.origin, em.dir)));
