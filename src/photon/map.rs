@@ -192,6 +192,7 @@ impl PhotonMap {
     /// Gathers the photons near `x` into `scratch` (a disc flattened along `ns`) and returns the
     /// squared radius of the estimate's disc, or `None` when nothing was found. Photons arriving
     /// from behind the surface (`wi . ns <= 0`) are left for the caller to reject.
+    #[inline]
     fn gather(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Option<f32> {
         if self.tree.is_empty() {
             scratch.clear();

@@ -107,6 +107,7 @@ impl<T: KdPoint> KdTree<T> {
     /// **Correctness requirement:** `dist2(d) ≥ d[a]²` for every axis `a` (true for any metric
     /// `≥ |d|²`, such as [`flattened_metric`] with `stretch ≥ 1`); otherwise results may miss
     /// items that a linear scan would find.
+    #[inline]
     pub fn knn_with<F: Fn(Vec3) -> f32>(
         &self,
         p: Vec3,
