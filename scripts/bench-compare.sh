@@ -23,7 +23,7 @@ cases=(
     "caustics:scenes/caustics/caustics.toml:--integrator photon"
     "caustics-fg:scenes/caustics/caustics.toml:--indirect final-gather --final-gather-rays 8 --spp 8"
     "cornell-sppm:scenes/cornell/cornell.toml:--integrator sppm --passes 8"
-    "cornell-path:scenes/cornell/cornell.toml:--integrator path --spp 16"
+    "cornell-path:scenes/cornell/cornell.toml:--integrator path --spp 256"
 )
 for round in $(seq 1 "$rounds"); do
     for c in "${cases[@]}"; do

@@ -1,6 +1,6 @@
 //! An independent unidirectional path tracer (`--integrator path`), a cross-check of the photon
 //! mapper that shares only the scene, materials, lights and accelerator with it: no photon map,
-//! no irradiance cache, no final gather.
+//! no precomputed irradiance, no final gather.
 //!
 //! At each vertex: emission, counted in full when seen by the camera or through a delta
 //! (mirror, glass) bounce, and otherwise weighted by the power heuristic against the density

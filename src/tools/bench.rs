@@ -220,7 +220,7 @@ pub fn median(mut v: Vec<f64>) -> f64 {
     }
 }
 
-/// Bytes per stored photon over the photon maps of a render (the irradiance cache excluded);
+/// Bytes per stored photon over the photon maps of a render (the precomputed irradiance excluded);
 /// `bytes` is the largest map of the render's passes, so stored photons are counted per pass.
 fn bytes_per_photon(stats: &Stats) -> f64 {
     let maps = stats.photons.iter().filter(|(k, _)| k.as_str() != "irradiance_cache").map(|(_, m)| m);

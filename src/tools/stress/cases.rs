@@ -260,7 +260,7 @@ fn back_facing(opts: &StressOptions) -> Vec<Row> {
 /// Light power scales the image linearly. Same seed, same random decisions (Russian roulette
 /// depends on albedo, not power), so `L(k) = k L(1)` pixel by pixel up to the rounding of the
 /// stored powers, which differs at each scale: RGB9E5 rounds each channel of a photon's power
-/// to within 2⁻⁹ of its largest channel, and the irradiance cache rounds the sums once more the
+/// to within 2⁻⁹ of its largest channel, and the precomputed irradiance rounds the sums once more the
 /// same way. So every channel of a pixel is within 2⁻⁸ of its largest channel times `k` (the
 /// bound; sums of many photons average the rounding down).
 fn power(opts: &StressOptions) -> Vec<Row> {
