@@ -12,6 +12,7 @@ use photonmap::accel::AccelOptions;
 use photonmap::integrator;
 use photonmap::scene::Scene;
 use photonmap::stats::Stats;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -88,12 +89,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     let cfg = settings
         .resolve(width, height)
         .with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
-    for out in [Some(&args.output), args.png.as_ref(), args.stats.as_ref()].into_iter().flatten() {
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        if !dir.is_dir() {
-            bail!("{}: the directory {} does not exist", out.display(), dir.display());
-        }
-    }
+    check_output_dirs([Some(&args.output), args.png.as_ref(), args.stats.as_ref()])?;
     let pool = pool(args.threads)?;
     let progress = progress::Bars::new(args.quiet);
     let load = stats.stages.clone();
@@ -125,18 +121,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     })?;
     output.stats.stages.splice(0..0, load);
     output.stats.scene = args.scene.display().to_string();
-    let mut stats = output.stats;
-    output.film.write_exr(&args.output)?;
-    if let Some(png) = &args.png {
-        output.film.write_png(png)?;
-    }
-    stats.wall_seconds = wall.elapsed().as_secs_f64();
-    stats.peak_memory_bytes = photonmap::stats::peak_memory_bytes().unwrap_or(0);
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats)?;
-        std::fs::write(path, json)
-            .with_context(|| format!("{}: could not write the stats", path.display()))?;
-    }
+    let stats = write_outputs(&args, output, wall)?;
     let passes = if stats.passes > 1 { format!(", {} passes", stats.passes) } else { String::new() };
     if !args.quiet || stats.cancelled {
         eprintln!(
@@ -152,6 +137,35 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         );
     }
     Ok(if stats.cancelled { Finished::Interrupted } else { Finished::Done })
+}
+
+/// Refuses output paths whose directory does not exist, before any work is done.
+fn check_output_dirs<'a>(paths: impl IntoIterator<Item = Option<&'a PathBuf>>) -> Result<()> {
+    for out in paths.into_iter().flatten() {
+        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        if !dir.is_dir() {
+            bail!("{}: the directory {} does not exist", out.display(), dir.display());
+        }
+    }
+    Ok(())
+}
+
+/// Writes the image (EXR, and PNG if asked) and, if asked, the stats; returns the stats with
+/// the whole command's time and peak memory.
+fn write_outputs(args: &cli::RenderArgs, output: integrator::RenderOutput, wall: Instant) -> Result<Stats> {
+    let mut stats = output.stats;
+    output.film.write_exr(&args.output)?;
+    if let Some(png) = &args.png {
+        output.film.write_png(png)?;
+    }
+    stats.wall_seconds = wall.elapsed().as_secs_f64();
+    stats.peak_memory_bytes = photonmap::stats::peak_memory_bytes().unwrap_or(0);
+    if let Some(path) = &args.stats {
+        let json = serde_json::to_string_pretty(&stats)?;
+        std::fs::write(path, json)
+            .with_context(|| format!("{}: could not write the stats", path.display()))?;
+    }
+    Ok(stats)
 }
 
 fn agree(args: cli::AgreeArgs) -> Result<()> {
@@ -232,12 +246,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0 && **b <= 1e6)) {
         bail!("--budgets: {b} is not a number of seconds in (0, 1e6]");
     }
-    for out in [args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten() {
-        let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
-        if !dir.is_dir() {
-            bail!("{}: the directory {} does not exist", out.display(), dir.display());
-        }
-    }
+    check_output_dirs([args.csv.as_ref(), args.plot.as_ref()])?;
     let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
     let peers = match &args.peers {
         Some(path) => {
