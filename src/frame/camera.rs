@@ -28,6 +28,33 @@ pub struct PixelSamples {
     pub seed: u64,
 }
 
+/// The independent sample sequences of a pixel, each a Halton sequence with its own per-pixel
+/// rotation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stream {
+    /// The camera samples: `spp` a pass, continued from pass to pass.
+    Camera,
+    /// Progressive photon mapping's visible points: one a pass, so that the visible points of
+    /// all passes together cover the pixel evenly whatever `spp` is. (Taking the pass's first
+    /// camera sample instead, Halton index `pass * spp`, kept every visible point in a strip a
+    /// quarter of the pixel wide at 4 spp: the radical inverse of `4k` is that of `k` over 4.)
+    VisiblePoint,
+}
+
+impl PixelSamples {
+    /// Where in pixel number `pixel` sample `index` of `stream` lies, in `[0, 1)²`.
+    #[inline]
+    pub fn position(&self, stream: Stream, pixel: u64, index: u64) -> [f32; 2] {
+        let salt = match stream {
+            Stream::Camera => 0x5A3D1E,
+            Stream::VisiblePoint => 0x715B1E,
+        };
+        let mut rotation = Pcg32::seed_from_u64(derive_seed(self.seed, salt, pixel));
+        let offset = [rotation.gen(), rotation.gen()];
+        halton2(index, offset)
+    }
+}
+
 /// A pixel's primary rays and their hits, traced as one coherent batch; kept per thread.
 #[derive(Default)]
 pub struct CameraBatch {
@@ -50,6 +77,7 @@ impl<A: Accel> Frame<'_, A> {
         let mut rotation = Pcg32::seed_from_u64(derive_seed(samples.seed, 0x5A3D1E, pixel));
         let offset = [rotation.gen(), rotation.gen()];
         batch.rays.clear();
+        // (The rotation is `samples.position(Stream::Camera, ..)`'s, drawn once for the batch.)
         for s in 0..samples.spp as u64 {
             let [jx, jy] = halton2(samples.first + s, offset);
             batch.rays.push(self.camera.ray(px as f32 + jx, py as f32 + jy));
@@ -58,6 +86,15 @@ impl<A: Accel> Frame<'_, A> {
         batch.hits.resize(batch.rays.len(), None);
         self.accel.intersect_batch(&batch.rays, &mut batch.hits);
         c.rays.camera += batch.rays.len() as u64;
+    }
+}
+
+impl<A: Accel> Frame<'_, A> {
+    /// The ray of pixel `(px, py)`'s visible point in pass `pass` ([`Stream::VisiblePoint`]).
+    pub fn visible_point_ray(&self, samples: &PixelSamples, pass: u32, px: u32, py: u32) -> Ray {
+        let pixel = py as u64 * self.camera.width as u64 + px as u64;
+        let [jx, jy] = samples.position(Stream::VisiblePoint, pixel, pass as u64);
+        self.camera.ray(px as f32 + jx, py as f32 + jy)
     }
 }
 
@@ -134,6 +171,51 @@ impl SampleMean {
             Vec3::ZERO
         } else {
             self.sum / self.good as f32
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// How many of `xs` fall in each quarter of `[0, 1)`.
+    fn quarters(xs: impl Iterator<Item = f32>) -> [u32; 4] {
+        let mut q = [0; 4];
+        xs.for_each(|x| q[((x * 4.0) as usize).min(3)] += 1);
+        q
+    }
+
+    #[test]
+    fn visible_points_cover_the_pixel_for_any_spp() {
+        for spp in [1, 3, 4, 16] {
+            let samples = PixelSamples { spp, first: 0, seed: 7 };
+            for pixel in [0, 1, 12345] {
+                let p: Vec<[f32; 2]> =
+                    (0..64).map(|k| samples.position(Stream::VisiblePoint, pixel, k)).collect();
+                for axis in 0..2 {
+                    let q = quarters(p.iter().map(|p| p[axis]));
+                    assert!(
+                        q.iter().all(|&n| (14..=18).contains(&n)),
+                        "spp {spp}, pixel {pixel}, axis {axis}: {q:?}"
+                    );
+                }
+            }
+        }
+        // The defect this replaces: the first camera sample of each pass.
+        let samples = PixelSamples { spp: 4, first: 0, seed: 7 };
+        let q = quarters((0..64).map(|k| samples.position(Stream::Camera, 0, 4 * k)[0]));
+        assert!(q.iter().filter(|&&n| n > 0).count() <= 2, "{q:?}");
+    }
+
+    #[test]
+    fn the_camera_batch_takes_the_camera_stream() {
+        // camera_rays draws its rotation inline; it must be the stream's.
+        let samples = PixelSamples { spp: 4, first: 8, seed: 3 };
+        let mut rotation = Pcg32::seed_from_u64(derive_seed(3, 0x5A3D1E, 5));
+        let offset = [rotation.gen(), rotation.gen()];
+        for s in 0..4 {
+            assert_eq!(halton2(8 + s, offset), samples.position(Stream::Camera, 5, 8 + s));
         }
     }
 }

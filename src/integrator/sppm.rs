@@ -4,8 +4,10 @@
 //! Every pass traces fresh photon maps (the indirect map and, when the scene has mirrors or
 //! glass, the aimed caustic map: together every photon path but the first hit, which direct
 //! light covers) and `spp` camera samples per pixel. Emission and direct light (shadow rays)
-//! along each sample are averaged over all passes. The first sample's first diffuse or glossy
-//! hit is the pixel's *visible point* of the pass: the photons within the pixel's radius `R`
+//! along each sample are averaged over all passes. The first diffuse or glossy hit of one more
+//! ray per pixel and pass, from a sequence of its own that covers the pixel evenly over passes
+//! ([`Stream::VisiblePoint`](crate::frame::camera::Stream)), is the pixel's *visible point* of
+//! the pass: the photons within the pixel's radius `R`
 //! around it (a disc flattened along the surface, as in the gathers) give `M` photons and a
 //! flux `Φ = Σ β f(wo, wi) power`, and the pixel's statistics are updated as in the paper:
 //!
@@ -21,18 +23,20 @@
 
 use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassRenderer};
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::config::ProgressiveConfig;
 use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Progress};
+use crate::geometry::Ray;
 use crate::material::face_forward;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use crate::stats::Stats;
 use glam::Vec3;
+use rand_pcg::Pcg32;
 
 /// A pixel's progressive statistics (the emission and direct light, averaged over passes like
 /// any integrator's image, are not here).
@@ -90,15 +94,10 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                 |x, y, st, rng, scratch: &mut Scratch, c| {
                     frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
                     let mut mean = SampleMean::default();
-                    let mut first = None;
-                    for (i, (ray, hit)) in scratch.batch.rays.iter().zip(&scratch.batch.hits).enumerate() {
-                        let (l, visible) = trace_camera(frame, cfg, *ray, *hit, rng, c);
-                        mean.add(l, c);
-                        if i == 0 {
-                            first = visible;
-                        }
+                    for (ray, hit) in scratch.batch.rays.iter().zip(&scratch.batch.hits) {
+                        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
                     }
-                    if let Some(v) = first {
+                    if let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) {
                         gather(&maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, c);
                     }
                     mean.mean()
@@ -127,32 +126,44 @@ struct Scratch {
     neighbors: Vec<Neighbor>,
 }
 
-/// Follows a camera sample through mirrors and glass: returns the emission seen and the direct
-/// light at the first diffuse or glossy surface, and that surface (the visible point).
-fn trace_camera<'s, A: Accel>(
-    frame: &Frame<'s, A>,
+/// Follows a camera sample through mirrors and glass: the emission seen and the direct light
+/// at the first diffuse or glossy surface.
+fn trace_camera<A: Accel>(
+    frame: &Frame<'_, A>,
     cfg: &ProgressiveConfig,
-    ray: crate::geometry::Ray,
-    first: Option<crate::accel::Hit>,
-    rng: &mut rand_pcg::Pcg32,
+    ray: Ray,
+    first: Option<Hit>,
+    rng: &mut Pcg32,
     c: &mut Counters,
-) -> (Vec3, Option<Landing<'s>>) {
+) -> Vec3 {
     let mut l = Vec3::ZERO;
     let count = |c: &mut Counters| c.rays.specular += 1;
-    let landing = walk(
-        frame,
-        Start::Traced(ray, first),
-        Vec3::ONE,
-        cfg.max_depth,
-        rng,
-        c,
-        count,
-        |hit, wo, m, beta| l += beta * m.emitted(hit.n, wo),
-    );
+    let start = Start::Traced(ray, first);
+    let landing = walk(frame, start, Vec3::ONE, cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
+        l += beta * m.emitted(hit.n, wo)
+    });
     if let Some(v) = &landing {
         l += v.beta * direct_light(frame, &v.hit, v.wo, v.m, cfg.light_samples, rng, c);
     }
-    (l, landing)
+    l
+}
+
+/// The pixel's visible point of `pass`: the first diffuse or glossy surface along the pass's
+/// visible-point ray ([`Frame::visible_point_ray`]), through mirrors and glass.
+fn visible_point<'s, A: Accel>(
+    frame: &Frame<'s, A>,
+    cfg: &ProgressiveConfig,
+    pass: &Pass,
+    x: u32,
+    y: u32,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> Option<Landing<'s>> {
+    let ray = frame.visible_point_ray(&pass.samples, pass.index, x, y);
+    c.rays.camera += 1;
+    let hit = frame.accel.intersect(&ray);
+    let count = |c: &mut Counters| c.rays.specular += 1;
+    walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _, _, _| {})
 }
 
 /// The photons of this pass around the visible point: the progressive update of `st`.
