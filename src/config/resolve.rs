@@ -147,14 +147,14 @@ fn validate_maps(m: &PhotonPasses) -> Result<(), ConfigError> {
 }
 
 fn validate_gathers(g: &Gathers) -> Result<(), ConfigError> {
-    if g.gather_photons == 0 || g.gather_photons > 10_000 {
-        return Err(bad("gather_photons", format!("{} is not in 1..=10000", g.gather_photons)));
-    }
-    if g.caustic_gather_photons == 0 || g.caustic_gather_photons > 10_000 {
-        return Err(bad(
-            "caustic_gather_photons",
-            format!("{} is not in 1..=10000", g.caustic_gather_photons),
-        ));
+    // An estimate through the k-th photon counts the k - 1 inside (`photon::map`): k = 1
+    // would count none.
+    for (field, k) in
+        [("gather_photons", g.gather_photons), ("caustic_gather_photons", g.caustic_gather_photons)]
+    {
+        if !(2..=10_000).contains(&k) {
+            return Err(bad(field, format!("{k} is not in 2..=10000")));
+        }
     }
     for (field, r) in [("gather_radius", g.gather_radius), ("caustic_gather_radius", g.caustic_gather_radius)]
     {
