@@ -55,6 +55,16 @@ fn variants() -> Vec<(&'static str, RenderSettings)> {
                 ..base.clone()
             },
         ),
+        (
+            "pppm",
+            RenderSettings {
+                integrator: Some(IntegratorKind::Pppm),
+                passes: Some(3),
+                photons: Some(5_000),
+                caustic_photons: Some(2_000),
+                ..base.clone()
+            },
+        ),
         ("path", RenderSettings { integrator: Some(IntegratorKind::Path), spp: Some(4), ..base }),
     ]
 }

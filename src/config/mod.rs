@@ -84,6 +84,9 @@ crate::choice! {
         /// Stochastic progressive photon mapping (Hachisuka & Jensen 2009): passes of photons
         /// with a per-pixel radius that shrinks, so the error goes to zero as passes are added.
         Sppm = "sppm",
+        /// Probabilistic progressive photon mapping (Knaus & Zwicker 2011): independent passes
+        /// whose gather radius depends only on the pass index, averaged.
+        Pppm = "pppm",
     }
 }
 
@@ -147,7 +150,7 @@ pub struct PhotonConfig {
     pub component: Component,
 }
 
-/// Stochastic progressive photon mapping.
+/// Progressive photon mapping, stochastic or pass-indexed.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ProgressiveConfig {
     /// The maps traced at every pass.
@@ -174,6 +177,8 @@ pub struct PathConfig {
 pub enum Integrator {
     Photon(PhotonConfig),
     Progressive(ProgressiveConfig),
+    /// Pass-indexed progressive photon mapping: the same settings as the stochastic kind.
+    PassIndexed(ProgressiveConfig),
     Path(PathConfig),
 }
 
@@ -182,6 +187,7 @@ impl Integrator {
         match self {
             Integrator::Photon(_) => IntegratorKind::Photon,
             Integrator::Progressive(_) => IntegratorKind::Sppm,
+            Integrator::PassIndexed(_) => IntegratorKind::Pppm,
             Integrator::Path(_) => IntegratorKind::Path,
         }
     }
@@ -190,7 +196,7 @@ impl Integrator {
     pub fn photon_passes(&self) -> Option<&PhotonPasses> {
         match self {
             Integrator::Photon(c) => Some(&c.maps),
-            Integrator::Progressive(c) => Some(&c.maps),
+            Integrator::Progressive(c) | Integrator::PassIndexed(c) => Some(&c.maps),
             Integrator::Path(_) => None,
         }
     }

@@ -21,7 +21,7 @@ impl RenderSettings {
     pub fn resolve(&self, width: u32, height: u32) -> Result<RenderConfig, ConfigError> {
         let kind = self.integrator.unwrap_or_default();
         // Progressive photon mapping counts photons and camera samples per pass.
-        let sppm = kind == IntegratorKind::Sppm;
+        let sppm = matches!(kind, IntegratorKind::Sppm | IntegratorKind::Pppm);
         let maps = PhotonPasses {
             photons: self.photons.unwrap_or(if sppm { SPPM_PHOTONS } else { 1_000_000 }),
             caustic_photons: self.caustic_photons.unwrap_or(if sppm {
@@ -55,12 +55,16 @@ impl RenderSettings {
                 max_depth,
                 component,
             }),
-            IntegratorKind::Sppm => {
+            IntegratorKind::Sppm | IntegratorKind::Pppm => {
                 if component != Component::All {
                     return Err(bad("component", "progressive photon mapping renders the whole sum only"));
                 }
                 let alpha = self.alpha.unwrap_or(0.7);
-                Integrator::Progressive(ProgressiveConfig { maps, gathers, alpha, light_samples, max_depth })
+                let c = ProgressiveConfig { maps, gathers, alpha, light_samples, max_depth };
+                match kind {
+                    IntegratorKind::Sppm => Integrator::Progressive(c),
+                    _ => Integrator::PassIndexed(c),
+                }
             }
             IntegratorKind::Path => Integrator::Path(PathConfig { max_depth }),
         };

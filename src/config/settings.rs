@@ -131,8 +131,8 @@ settings! {
     irradiance_cache: bool,
     /// Render only one term of the sum: emitted, direct, caustic or indirect [default: all].
     component: Component,
-    /// Photon mapping, progressive photon mapping, or the path tracer (next-event estimation and
-    /// MIS) as a cross-check; the path tracer ignores the photon settings and uses --max-depth
+    /// Photon mapping, stochastic (sppm) or pass-indexed (pppm) progressive photon mapping, or
+    /// the path tracer (next-event estimation and MIS) as a cross-check; the path tracer ignores the photon settings and uses --max-depth
     /// for every bounce [default: photon].
     integrator: IntegratorKind,
     /// Render this many passes and average them (progressive photon mapping shrinks its radii

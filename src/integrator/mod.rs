@@ -1,5 +1,5 @@
-//! The integrators: two-pass photon mapping ([`photon`]), stochastic progressive photon mapping
-//! ([`sppm`]) and the path tracer ([`path`]), each a [`passes::PassRenderer`] with its own
+//! The integrators: two-pass photon mapping ([`photon`]), stochastic and pass-indexed
+//! progressive photon mapping ([`sppm`], [`pppm`]) and the path tracer ([`path`]), each a [`passes::PassRenderer`] with its own
 //! settings ([`Integrator`]'s variants), picked by one `match` in [`render`]. The pass loop,
 //! time budget, checkpoints and stop requests are [`passes`]'s, the same for all; the photon
 //! stages shared by the two photon mappers are [`maps`]'s. Everything below them — scene,
@@ -10,6 +10,7 @@ pub mod maps;
 pub mod passes;
 pub mod path;
 pub mod photon;
+pub mod pppm;
 pub mod sppm;
 
 pub use passes::{Checkpoint, Control};
@@ -46,6 +47,9 @@ pub fn render<A: Accel>(
         }
         Integrator::Progressive(c) => {
             passes::run(cfg, control, progress, &mut stats, &mut sppm::Progressive::new(frame, c))
+        }
+        Integrator::PassIndexed(c) => {
+            passes::run(cfg, control, progress, &mut stats, &mut pppm::PassIndexed::new(frame, c))
         }
         Integrator::Path(c) => {
             passes::run(cfg, control, progress, &mut stats, &mut path::PathTracer::new(frame, c))

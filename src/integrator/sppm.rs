@@ -121,14 +121,14 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
 
 /// Per-thread scratch buffers reused across pixels.
 #[derive(Default)]
-struct Scratch {
-    batch: CameraBatch,
-    neighbors: Vec<Neighbor>,
+pub(super) struct Scratch {
+    pub(super) batch: CameraBatch,
+    pub(super) neighbors: Vec<Neighbor>,
 }
 
 /// Follows a camera sample through mirrors and glass: the emission seen and the direct light
 /// at the first diffuse or glossy surface.
-fn trace_camera<A: Accel>(
+pub(super) fn trace_camera<A: Accel>(
     frame: &Frame<'_, A>,
     cfg: &ProgressiveConfig,
     ray: Ray,
@@ -150,7 +150,7 @@ fn trace_camera<A: Accel>(
 
 /// The pixel's visible point of `pass`: the first diffuse or glossy surface along the pass's
 /// visible-point ray ([`Frame::visible_point_ray`]), through mirrors and glass.
-fn visible_point<'s, A: Accel>(
+pub(super) fn visible_point<'s, A: Accel>(
     frame: &Frame<'s, A>,
     cfg: &ProgressiveConfig,
     pass: &Pass,
@@ -180,32 +180,13 @@ fn gather(
         return;
     }
     let ns = face_forward(v.hit.n, v.wo);
-    let x = v.hit.p;
     if st.r2 == 0.0 {
-        // The first radius: the k-th nearest photon in the map where they are densest.
-        let kinds = [(&maps.indirect, &gathers.indirect), (&maps.caustic, &gathers.caustic)];
-        st.r2 = f32::INFINITY;
-        for (kind, params) in kinds {
-            for map in kind.iter() {
-                st.r2 = st.r2.min(map.knn_radius2(x, ns, params, nb));
-            }
-        }
-        c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
-        if !(st.r2.is_finite() && st.r2 > 0.0) {
-            st.r2 = 0.0;
-            return;
+        match first_radius2(maps, gathers, v.hit.p, ns, nb, c) {
+            Some(r2) => st.r2 = r2,
+            None => return,
         }
     }
-    let r = st.r2.sqrt();
-    let mut phi = Vec3::ZERO;
-    let mut m = 0u32;
-    for map in maps.indirect.iter().chain(&maps.caustic) {
-        m += map.for_each_within(x, ns, r, gathers.indirect.flatten, |wi, power| {
-            phi += v.m.eval(v.hit.n, v.wo, wi) * power;
-        });
-    }
-    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
-    let phi = v.beta * phi;
+    let (phi, m) = flux_within(maps, gathers, v, ns, st.r2.sqrt(), c);
     if m == 0 {
         return;
     }
@@ -219,4 +200,47 @@ fn gather(
     st.tau = (st.tau + phi) * ratio;
     st.r2 *= ratio;
     st.n = n_new;
+}
+
+/// The squared distance from `x` to the `k`-th nearest photon in the map where photons are
+/// densest (so caustics start small), bounded by the gather radius; `None` where no photon is
+/// near enough.
+pub(super) fn first_radius2(
+    maps: &PhotonMaps,
+    gathers: &GatherPair,
+    x: Vec3,
+    ns: Vec3,
+    nb: &mut Vec<Neighbor>,
+    c: &mut Counters,
+) -> Option<f32> {
+    let kinds = [(&maps.indirect, &gathers.indirect), (&maps.caustic, &gathers.caustic)];
+    let mut r2 = f32::INFINITY;
+    for (kind, params) in kinds {
+        for map in kind.iter() {
+            r2 = r2.min(map.knn_radius2(x, ns, params, nb));
+        }
+    }
+    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
+    (r2.is_finite() && r2 > 0.0).then_some(r2)
+}
+
+/// The flux `β Σ f(wo, wi) power` of the photons of every map within `r` of the visible point
+/// `v` (a disc flattened along `ns`), and how many there were.
+pub(super) fn flux_within(
+    maps: &PhotonMaps,
+    gathers: &GatherPair,
+    v: &Landing<'_>,
+    ns: Vec3,
+    r: f32,
+    c: &mut Counters,
+) -> (Vec3, u32) {
+    let mut phi = Vec3::ZERO;
+    let mut m = 0u32;
+    for map in maps.indirect.iter().chain(&maps.caustic) {
+        m += map.for_each_within(v.hit.p, ns, r, gathers.indirect.flatten, |wi, power| {
+            phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+        });
+    }
+    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
+    (v.beta * phi, m)
 }

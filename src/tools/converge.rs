@@ -31,6 +31,8 @@ crate::choice! {
         FinalGather = "final-gather",
         /// Stochastic progressive photon mapping (its defaults: 100k + 30k photons, 4 spp a pass).
         Sppm = "sppm",
+        /// Pass-indexed progressive photon mapping (the same defaults).
+        Pppm = "pppm",
         /// The path tracer, 4 spp a pass.
         Path = "path",
     }
@@ -58,6 +60,7 @@ impl Method {
                 ..photon
             },
             Method::Sppm => RenderSettings { integrator: Some(IntegratorKind::Sppm), ..Default::default() },
+            Method::Pppm => RenderSettings { integrator: Some(IntegratorKind::Pppm), ..Default::default() },
             Method::Path => {
                 RenderSettings { integrator: Some(IntegratorKind::Path), spp: Some(4), ..Default::default() }
             }

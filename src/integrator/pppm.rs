@@ -1,0 +1,121 @@
+//! Pass-indexed ("probabilistic") progressive photon mapping (Knaus & Zwicker, "Progressive
+//! Photon Mapping: A Probabilistic Approach", ACM TOG 30(3), 2011).
+//!
+//! Every pass is an independent photon-mapping render: fresh maps (the same photon stages as
+//! the stochastic kind), `spp` camera samples for emission and direct light, and one visible
+//! point per pixel whose photons within a radius `r_i` give the photon term `Φ / (π r_i²)`.
+//! The radius of pass `i` (counted from 1) depends on `i` only:
+//!
+//! ```text
+//! r²_i = r²_1 · Π_{j=1}^{i-1} (j + α) / (j + 1)   (~ i^(α-1))
+//! ```
+//!
+//! so the variance of a pass grows as `i^(1-α)` while its bias shrinks as `r²_i`; the average
+//! of `n` passes converges with both going to zero. `r_1` is the pass's own distance from the
+//! visible point to its `k`-th nearest photon (`--gather-photons`, bounded by
+//! `--gather-radius`): nothing is carried from pass to pass, so a pass's image depends only on
+//! (seed, pass index) and passes rendered anywhere can be averaged.
+
+use super::maps::{Analysis, GatherPair, MapStages};
+use super::passes::{camera_stage, Pass, PassRenderer};
+use super::sppm::{first_radius2, flux_within, trace_camera, visible_point, Scratch};
+use crate::accel::Accel;
+use crate::config::ProgressiveConfig;
+use crate::film::Film;
+use crate::frame::camera::{for_each_pixel, SampleMean};
+use crate::frame::{Counters, Frame, Progress};
+use crate::material::face_forward;
+use crate::stats::Stats;
+
+/// Pass-indexed progressive photon mapping over a render's passes.
+pub struct PassIndexed<'f, 'a, A: Accel> {
+    frame: &'f Frame<'a, A>,
+    cfg: &'f ProgressiveConfig,
+    analysis: Analysis,
+    gathers: GatherPair,
+}
+
+impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig) -> Self {
+        PassIndexed {
+            frame,
+            cfg,
+            analysis: Analysis::of(frame.scene, frame.lights),
+            gathers: GatherPair::new(&cfg.gathers, frame.scene),
+        }
+    }
+}
+
+/// `r²_i / r²_1` for the pass with 0-based index `pass`: `Π_{j=1}^{pass} (j + α) / (j + 1)`.
+pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
+    let alpha = alpha as f64;
+    (1..=pass as u64).map(|j| (j as f64 + alpha) / (j as f64 + 1.0)).product::<f64>() as f32
+}
+
+impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
+    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+        let stages = MapStages {
+            passes: &self.cfg.maps,
+            indirect_unused: None,
+            caustic_unused: None,
+            site_stride: None,
+        };
+        let (maps, _) = stages.trace(self.frame, &self.analysis, pass.seed, stats, progress);
+        stats.skip("irradiance", "progressive photon mapping gathers at visible points");
+        let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
+        let scale = radius2_scale(pass.index, cfg.alpha);
+        let camera = &frame.camera;
+        let mut pixels = vec![(); camera.width as usize * camera.height as usize];
+        let why = "visible points at the pass's radius, direct light";
+        camera_stage(stats, progress, camera.height, why, || {
+            let width = camera.width as usize;
+            for_each_pixel(
+                width,
+                &mut pixels,
+                pass.seed,
+                progress,
+                |x, y, _, rng, scratch: &mut Scratch, c| {
+                    frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
+                    let mut mean = SampleMean::default();
+                    for (ray, hit) in scratch.batch.rays.iter().zip(&scratch.batch.hits) {
+                        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
+                    }
+                    let mut l = mean.mean();
+                    let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) else { return l };
+                    if maps.indirect.is_empty() && maps.caustic.is_empty() {
+                        return l;
+                    }
+                    let ns = face_forward(v.hit.n, v.wo);
+                    let Some(r2) = first_radius2(&maps, gathers, v.hit.p, ns, &mut scratch.neighbors, c)
+                    else {
+                        return l;
+                    };
+                    let r2 = r2 * scale;
+                    let (phi, _) = flux_within(&maps, gathers, &v, ns, r2.sqrt(), c);
+                    let photons = phi / (std::f32::consts::PI * r2);
+                    if photons.is_finite() {
+                        l += photons;
+                    } else {
+                        c.nonfinite += 1;
+                    }
+                    l
+                },
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::radius2_scale;
+
+    #[test]
+    fn the_radius_shrinks_as_knaus_and_zwicker_prescribe() {
+        assert_eq!(radius2_scale(0, 0.7), 1.0);
+        assert!((radius2_scale(1, 0.7) - 1.7 / 2.0).abs() < 1e-6);
+        assert!((radius2_scale(2, 0.7) - 1.7 / 2.0 * 2.7 / 3.0).abs() < 1e-6);
+        // r²_i ~ i^(α-1): the ratio of passes 1000 and 100 is close to 10^(α-1).
+        let ratio = radius2_scale(999, 0.7) / radius2_scale(99, 0.7);
+        assert!((ratio - 10f32.powf(-0.3)).abs() < 0.01, "{ratio}");
+    }
+}
