@@ -122,6 +122,9 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     output.stats.stages.splice(0..0, load);
     output.stats.scene = args.scene.display().to_string();
     let stats = write_outputs(&args, output, wall)?;
+    for w in &stats.warnings {
+        eprintln!("photonmap: warning: {w}");
+    }
     let passes = if stats.passes > 1 { format!(", {} passes", stats.passes) } else { String::new() };
     if !args.quiet || stats.cancelled {
         eprintln!(

@@ -78,6 +78,9 @@ pub struct Stats {
     /// render (only when asked for: `--stats`, `photonmap bench`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub raw_rays: Option<RawRays>,
+    /// What the render left out that the image would otherwise show (printed by the command
+    /// too), once each.
+    pub warnings: Vec<String>,
     /// The raw rates weighted by the render's mix of rays (rays/s), 0 when not measured.
     pub raw_rays_per_second: f64,
     /// `rays_per_second / raw_rays_per_second`: the share of the photon and camera stages'
@@ -128,6 +131,14 @@ pub fn peak_memory_bytes() -> Option<u64> {
 
 impl Stats {
     /// Records a stage that was skipped, with the reason.
+    /// Records a warning (a repeat of one already recorded is dropped: passes repeat stages).
+    pub fn warn(&mut self, message: impl Into<String>) {
+        let message = message.into();
+        if !self.warnings.contains(&message) {
+            self.warnings.push(message);
+        }
+    }
+
     pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
         self.stages.push(Stage { name: name.into(), ran: false, reason: reason.into(), seconds: 0.0 });
     }
