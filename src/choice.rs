@@ -1,7 +1,7 @@
 //! Enumerations chosen by name, in scene files and on the command line: one list of variants
 //! and their names, from which serde (TOML, JSON) and the command line both read.
 //!
-//! [`choice!`](crate::choice) declares such an enum; the command-line crate turns
+//! [`choice!`](macro@crate::choice) declares such an enum; the command-line crate turns
 //! [`Choice::NAMES`] into the values a flag accepts, so the library needs no argument parser.
 
 /// An enum whose variants are picked by name.

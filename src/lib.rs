@@ -5,7 +5,7 @@
 //! draws it):
 //!
 //! * [`geometry`] (rays, boxes, meshes, robust offsets), [`sampling`] (warps, distributions,
-//!   low-discrepancy sequences, seeds), [`choice`] (enums chosen by name), [`film`] (images,
+//!   low-discrepancy sequences, seeds), [`choice`](mod@choice) (enums chosen by name), [`film`] (images,
 //!   EXR/PNG, error metrics), [`stats`] (what a render reports);
 //! * [`accel`] (ray casting: Embree, the BVH, brute force, behind one trait), [`material`],
 //!   [`light`] (the lights and the [`light::LightSet`] renders sample), [`config`] (settings

@@ -1,5 +1,5 @@
 //! Tools that measure the renderer rather than render: backend agreement ([`agree`]), the stress
-//! suite ([`stress`]), error against time ([`converge`], drawn by [`plot`]), speed ([`bench`]),
+//! suite ([`stress`]), error against time ([`converge`], drawn by [`plot`]), speed ([`bench`](mod@bench)),
 //! and the lecture's Monte Carlo examples ([`montecarlo`]). They sit above the integrators and
 //! nothing in the renderer imports them.
 

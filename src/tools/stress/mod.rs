@@ -1,7 +1,7 @@
 //! The stress suite: numerical stability of the whole renderer under extreme scenes.
 //!
 //! Each [`Case`] builds its scenes in memory ([`scenes`]), renders them with the real renderer
-//! ([`render_scene`](crate::integrator::render_scene)) on every backend asked for, and checks a
+//! ([`render_scene`](crate::integrator::render_scene())) on every backend asked for, and checks a
 //! result known in advance: the white furnace (radiance 2 everywhere) at world scales 10⁻⁴, 1,
 //! 10⁴ and moved by 10⁵; a plane lit at 1° and 0.1° by a distant light (the analytic
 //! `E cos θ ρ / π`); coplanar and touching surfaces, a camera inside a box, a light inside a
