@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Installs what is missing, then runs the whole test suite: formatting, lints, every test with
+# Installs what is missing, then runs the whole test suite: formatting, lints, docs, every test with
 # Embree (the default) and without it, and a type-check of the Embree 4 code path against
 # Debian 13's headers.
 set -euo pipefail
@@ -14,6 +14,8 @@ cargo fmt --all -- --check
 step "lints (Embree on, then off)"
 cargo clippy --all-targets --locked -- -D warnings
 cargo clippy --all-targets --locked --no-default-features -- -D warnings
+step "docs (no broken or ambiguous links)"
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked
 step "tests without Embree (pure-Rust BVH only)"
 cargo test --locked --no-default-features
 step "fuzz targets compile (run them with scripts/fuzz.sh)"
