@@ -45,13 +45,18 @@ impl PixelSamples {
     /// Where in pixel number `pixel` sample `index` of `stream` lies, in `[0, 1)²`.
     #[inline]
     pub fn position(&self, stream: Stream, pixel: u64, index: u64) -> [f32; 2] {
+        halton2(index, self.rotation(stream, pixel))
+    }
+
+    /// The per-pixel rotation of `stream`'s sequence (fixed over passes).
+    #[inline]
+    fn rotation(&self, stream: Stream, pixel: u64) -> [f32; 2] {
         let salt = match stream {
             Stream::Camera => 0x5A3D1E,
             Stream::VisiblePoint => 0x715B1E,
         };
         let mut rotation = Pcg32::seed_from_u64(derive_seed(self.seed, salt, pixel));
-        let offset = [rotation.gen(), rotation.gen()];
-        halton2(index, offset)
+        [rotation.gen(), rotation.gen()]
     }
 }
 
@@ -74,10 +79,8 @@ impl<A: Accel> Frame<'_, A> {
         c: &mut Counters,
     ) {
         let pixel = py as u64 * self.camera.width as u64 + px as u64;
-        let mut rotation = Pcg32::seed_from_u64(derive_seed(samples.seed, 0x5A3D1E, pixel));
-        let offset = [rotation.gen(), rotation.gen()];
+        let offset = samples.rotation(Stream::Camera, pixel);
         batch.rays.clear();
-        // (The rotation is `samples.position(Stream::Camera, ..)`'s, drawn once for the batch.)
         for s in 0..samples.spp as u64 {
             let [jx, jy] = halton2(samples.first + s, offset);
             batch.rays.push(self.camera.ray(px as f32 + jx, py as f32 + jy));

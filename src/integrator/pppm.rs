@@ -16,13 +16,13 @@
 //! `--gather-radius`): nothing is carried from pass to pass, so a pass's image depends only on
 //! (seed, pass index) and passes rendered anywhere can be averaged.
 
-use super::maps::{Analysis, GatherPair, MapStages};
+use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassRenderer};
-use super::sppm::{first_radius2, flux_within, trace_camera, visible_point, Scratch};
+use super::sppm::{camera_samples, first_radius2, flux_within, pass_maps, visible_point, Scratch};
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
 use crate::film::Film;
-use crate::frame::camera::{for_each_pixel, SampleMean};
+use crate::frame::camera::for_each_pixel;
 use crate::frame::{Counters, Frame, Progress};
 use crate::material::face_forward;
 use crate::stats::Stats;
@@ -54,14 +54,7 @@ pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
 
 impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
     fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let stages = MapStages {
-            passes: &self.cfg.maps,
-            indirect_unused: None,
-            caustic_unused: None,
-            site_stride: None,
-        };
-        let (maps, _) = stages.trace(self.frame, &self.analysis, pass.seed, stats, progress);
-        stats.skip("irradiance", "progressive photon mapping gathers at visible points");
+        let maps = pass_maps(self.frame, self.cfg, &self.analysis, pass.seed, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let scale = radius2_scale(pass.index, cfg.alpha);
         let camera = &frame.camera;
@@ -75,12 +68,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                 pass.seed,
                 progress,
                 |x, y, _, rng, scratch: &mut Scratch, c| {
-                    frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
-                    let mut mean = SampleMean::default();
-                    for (ray, hit) in scratch.batch.rays.iter().zip(&scratch.batch.hits) {
-                        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
-                    }
-                    let mut l = mean.mean();
+                    let mut l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) else { return l };
                     if maps.indirect.is_empty() && maps.caustic.is_empty() {
                         return l;

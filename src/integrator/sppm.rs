@@ -74,14 +74,7 @@ impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
 
 impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
     fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let stages = MapStages {
-            passes: &self.cfg.maps,
-            indirect_unused: None,
-            caustic_unused: None,
-            site_stride: None,
-        };
-        let (maps, _) = stages.trace(self.frame, &self.analysis, pass.seed, stats, progress);
-        stats.skip("irradiance", "progressive photon mapping gathers at visible points");
+        let maps = pass_maps(self.frame, self.cfg, &self.analysis, pass.seed, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let why = "visible points, direct light and progressive radius updates";
         let width = frame.camera.width as usize;
@@ -92,15 +85,11 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                 pass.seed,
                 progress,
                 |x, y, st, rng, scratch: &mut Scratch, c| {
-                    frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
-                    let mut mean = SampleMean::default();
-                    for (ray, hit) in scratch.batch.rays.iter().zip(&scratch.batch.hits) {
-                        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
-                    }
+                    let l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     if let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) {
                         gather(&maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, c);
                     }
-                    mean.mean()
+                    l
                 },
             )
         })
@@ -126,9 +115,46 @@ pub(super) struct Scratch {
     pub(super) neighbors: Vec<Neighbor>,
 }
 
+/// The photon maps of a progressive pass (both kinds gather at visible points, so nothing is
+/// precomputed).
+pub(super) fn pass_maps<A: Accel>(
+    frame: &Frame<'_, A>,
+    cfg: &ProgressiveConfig,
+    analysis: &Analysis,
+    seed: u64,
+    stats: &mut Stats,
+    progress: &dyn Progress,
+) -> PhotonMaps {
+    let stages =
+        MapStages { passes: &cfg.maps, indirect_unused: None, caustic_unused: None, site_stride: None };
+    let (maps, _) = stages.trace(frame, analysis, seed, stats, progress);
+    stats.skip("irradiance", "progressive photon mapping gathers at visible points");
+    maps
+}
+
+/// The mean emission and direct light of pixel `(x, y)`'s camera samples in `pass`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn camera_samples<A: Accel>(
+    frame: &Frame<'_, A>,
+    cfg: &ProgressiveConfig,
+    pass: &Pass,
+    x: u32,
+    y: u32,
+    batch: &mut CameraBatch,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> Vec3 {
+    frame.camera_rays(&pass.samples, x, y, batch, c);
+    let mut mean = SampleMean::default();
+    for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
+        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
+    }
+    mean.mean()
+}
+
 /// Follows a camera sample through mirrors and glass: the emission seen and the direct light
 /// at the first diffuse or glossy surface.
-pub(super) fn trace_camera<A: Accel>(
+fn trace_camera<A: Accel>(
     frame: &Frame<'_, A>,
     cfg: &ProgressiveConfig,
     ray: Ray,
