@@ -9,10 +9,11 @@ use crate::frame::{Frame, Progress};
 use crate::light::LightSet;
 use crate::photon::irradiance::{self, SitePoint};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
-use crate::photon::trace::{self, Pass, PassSpec};
+use crate::photon::trace::{self, Pass, PassSpec, Target};
 use crate::scene::Scene;
 use crate::stats::Stats;
 use glam::Vec3;
+use std::cell::OnceCell;
 
 /// What the scene needs, decided before any work.
 #[derive(Clone, Debug)]
@@ -22,6 +23,17 @@ pub struct Analysis {
     /// Some triangle is diffuse or glossy (stores photons, gathers light).
     pub has_diffuse: bool,
     pub light_power: Vec3,
+    /// Where caustic photons are aimed and the share of emission that reaches there, worked
+    /// out at the first caustic pass (with its seed) and kept for the passes after it.
+    aim: OnceCell<Aim>,
+}
+
+/// The specular targets of aimed caustic photons, and the share of emission aimed at them (0:
+/// none found, or nothing to aim at).
+#[derive(Clone, Debug)]
+struct Aim {
+    targets: Vec<Target>,
+    acceptance: f64,
 }
 
 impl Analysis {
@@ -37,6 +49,7 @@ impl Analysis {
             has_specular: any(|m| m.is_specular()),
             has_diffuse: any(|m| m.is_diffuse_like()),
             light_power: lights.total_power(),
+            aim: OnceCell::new(),
         }
     }
 
@@ -166,16 +179,25 @@ impl MapStages<'_> {
             return Vec::new();
         }
         let forced = if p.caustic_pass == CausticPass::On { " (--caustic-pass on)" } else { "" };
-        let targets = if p.caustic_aim { trace::specular_targets(frame.scene) } else { Vec::new() };
-        let acceptance = if targets.is_empty() {
-            0.0
+        let no_aim = Aim { targets: Vec::new(), acceptance: 0.0 };
+        let Aim { targets, acceptance } = if !p.caustic_aim {
+            &no_aim
         } else {
-            ACCEPTANCE_TRIES
-                .iter()
-                .map(|&n| trace::target_acceptance(frame.lights, &targets, n, seed))
-                .find(|&a| a > 0.0)
-                .unwrap_or(0.0)
+            analysis.aim.get_or_init(|| {
+                let targets = trace::specular_targets(frame.scene);
+                let acceptance = if targets.is_empty() {
+                    0.0
+                } else {
+                    ACCEPTANCE_TRIES
+                        .iter()
+                        .map(|&n| trace::target_acceptance(frame.lights, &targets, n, seed))
+                        .find(|&a| a > 0.0)
+                        .unwrap_or(0.0)
+                };
+                Aim { targets, acceptance }
+            })
         };
+        let acceptance = *acceptance;
         let aim = acceptance > 0.0;
         let (tries, reason) = if aim {
             // Tries such that about `caustic_photons` photons are aimed at the targets.
@@ -209,7 +231,7 @@ impl MapStages<'_> {
                 n: tries,
                 color: p.color,
                 max_bounces: p.max_bounces,
-                targets: &targets,
+                targets,
                 aim,
                 seed: seed ^ 0x5EED,
             };
