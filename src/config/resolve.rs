@@ -1,7 +1,12 @@
 //! From settings to a [`RenderConfig`]: defaults filled, every value checked, and the settings
 //! of the chosen integrator gathered into its own config.
 
-use super::*;
+use super::{
+    ColorMode, Component, Gathers, IndirectMode, Integrator, IntegratorKind, Kernel, PathConfig,
+    PhotonConfig, PhotonPasses, ProgressiveConfig, RenderConfig, RenderSettings, BYTES_PER_PHOTON,
+    MAX_IMAGE_SIDE, MAX_PHOTONS, SPPM_CAUSTIC_PHOTONS, SPPM_GATHER_PHOTONS, SPPM_PASSES, SPPM_PHOTONS,
+    SPPM_SPP,
+};
 use crate::accel::AccelKind;
 
 /// A setting that cannot be honoured.
