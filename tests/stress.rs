@@ -28,6 +28,11 @@ fn furnace_at_every_scale() {
 }
 
 #[test]
+fn glass_at_the_default_depth() {
+    check("glass-furnace");
+}
+
+#[test]
 fn grazing_light() {
     check("grazing");
 }

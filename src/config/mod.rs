@@ -239,6 +239,13 @@ pub const SPPM_PASSES: u32 = 64;
 /// early bias and cheaper range queries).
 pub const SPPM_GATHER_PHOTONS: u32 = 30;
 
+/// Default longest camera path (`max_depth`) and photon path (`max_bounces`). Diffuse paths end
+/// by Russian roulette long before; the cap only stops light trapped in glass by total internal
+/// reflection, and a low one darkens it (`examples/glass_depth.rs`: a faceted glass sphere of
+/// IOR 2.5 in a uniform emitter, exact 1, averages 0.973 at depth 16, 0.992 at 256, 0.995 at
+/// 1000, at the same render time).
+pub const DEFAULT_DEPTH: u32 = 1000;
+
 /// Bytes one stored photon costs, tree included; used to refuse absurd budgets up front.
 pub const BYTES_PER_PHOTON: u64 = 20;
 /// Photon budgets above this are refused (10^9 photons would need about 20 GB).

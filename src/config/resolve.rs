@@ -4,8 +4,8 @@
 use super::{
     ColorMode, Component, Gathers, IndirectMode, Integrator, IntegratorKind, Kernel, PathConfig,
     PhotonConfig, PhotonPasses, ProgressiveConfig, RenderConfig, RenderSettings, BYTES_PER_PHOTON,
-    MAX_IMAGE_SIDE, MAX_PHOTONS, SPPM_CAUSTIC_PHOTONS, SPPM_GATHER_PHOTONS, SPPM_PASSES, SPPM_PHOTONS,
-    SPPM_SPP,
+    DEFAULT_DEPTH, MAX_IMAGE_SIDE, MAX_PHOTONS, SPPM_CAUSTIC_PHOTONS, SPPM_GATHER_PHOTONS, SPPM_PASSES,
+    SPPM_PHOTONS, SPPM_SPP,
 };
 use crate::accel::AccelKind;
 
@@ -34,7 +34,7 @@ impl RenderSettings {
             } else {
                 300_000
             }),
-            max_bounces: self.max_bounces.unwrap_or(64),
+            max_bounces: self.max_bounces.unwrap_or(DEFAULT_DEPTH),
             color: self.color.unwrap_or(ColorMode::Rgb),
             caustic_aim: self.caustic_aim.unwrap_or(true),
             caustic_pass: self.caustic_pass.unwrap_or_default(),
@@ -46,7 +46,7 @@ impl RenderSettings {
             caustic_gather_radius: self.caustic_gather_radius,
             kernel: self.kernel.unwrap_or(Kernel::Cone),
         };
-        let max_depth = self.max_depth.unwrap_or(16);
+        let max_depth = self.max_depth.unwrap_or(DEFAULT_DEPTH);
         let light_samples = self.light_samples.unwrap_or(1);
         let component = self.component.unwrap_or_default();
         let integrator = match kind {

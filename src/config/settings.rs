@@ -102,10 +102,10 @@ settings! {
     spp: u32,
     /// Random seed; the same seed gives the same image for any thread count [default: 1].
     seed: u64,
-    /// Longest photon path [default: 64].
+    /// Longest photon path; Russian roulette ends almost all of them far sooner [default: 1000].
     max_bounces: u32,
     /// Longest camera path through mirrors and glass; with the path tracer, of any kind
-    /// [default: 16].
+    /// [default: 1000].
     max_depth: u32,
     /// Photons per indirect radiance estimate (sppm: for the first radius) [default: 100; sppm:
     /// 30].

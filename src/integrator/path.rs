@@ -13,8 +13,9 @@
 //! Depth: `max_depth` bounds every bounce (diffuse, glossy and specular alike), counted
 //! after the camera ray, so emission is gathered at vertices `0..=max_depth` and light is
 //! sampled at vertices `0..max_depth`. In the white furnace (albedo `a`, emission `Le`
-//! everywhere) the estimate converges to `Le (1 - a^(d+1)) / (1 - a)`; the default depth 16 is
-//! within 8e-6 relative of the infinite-depth value there, so path mode keeps that default.
+//! everywhere) the estimate converges to `Le (1 - a^(d+1)) / (1 - a)`. Russian roulette ends
+//! diffuse paths long before the default depth (`config::DEFAULT_DEPTH`), which only stops
+//! light trapped in glass.
 
 use super::passes::{camera_stage, Pass, PassRenderer};
 use crate::accel::{Accel, Hit};

@@ -120,6 +120,34 @@ pub fn furnace(scale: f32, offset: Vec3) -> Scene {
     b.build("furnace", cam)
 }
 
+/// A faceted glass sphere (radius 1, `rings` × `2 rings` quads, outward facing) of index `ior`
+/// inside a cube `[-3, 3]³` that emits radiance 1 inward and reflects nothing. Lossless glass in
+/// a uniform emitter looks like the emitter: every pixel's exact value is 1, and a camera path
+/// cut short inside the glass (light trapped by total internal reflection) brings back less.
+pub fn glass_in_furnace(ior: f32, rings: u32) -> Scene {
+    let mut b = Builder::default();
+    let wall = b.material("wall", Material::Emissive { kd: Vec3::ZERO, ke: Vec3::ONE });
+    let glass = b.material("glass", Material::Glass { ior });
+    b.cuboid(-Vec3::splat(3.0), Vec3::splat(3.0), Facing::Inward, wall);
+    let at = |i: u32, j: u32| {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        let phi = std::f32::consts::PI * j as f32 / rings as f32;
+        Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin())
+    };
+    for i in 0..rings {
+        for j in 0..2 * rings {
+            let (p, q, r, s) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            if i > 0 {
+                b.triangle(p, r, q, glass);
+            }
+            if i + 1 < rings {
+                b.triangle(p, s, r, glass);
+            }
+        }
+    }
+    b.build("glass-in-furnace", camera(Vec3::new(0.0, 0.0, -2.6), Vec3::ZERO, Vec3::Y, 50.0))
+}
+
 /// A rotation that puts the plane `y = 0` at an angle to every axis, so that points on it are
 /// rounded in all three coordinates.
 fn tilt(p: Vec3) -> Vec3 {
