@@ -19,6 +19,10 @@ pub struct Stage {
 pub struct MapStats {
     pub emitted: u64,
     pub stored: u64,
+    /// Photons stored where the camera looks ([`crate::photon::guide::VisibleRegion`]).
+    pub seen: u64,
+    /// `seen / emitted`: the share of the photons emitted that the image can use.
+    pub efficiency: f64,
     pub bytes: u64,
 }
 
@@ -130,7 +134,6 @@ pub fn peak_memory_bytes() -> Option<u64> {
 }
 
 impl Stats {
-    /// Records a stage that was skipped, with the reason.
     /// Records a warning (a repeat of one already recorded is dropped: passes repeat stages).
     pub fn warn(&mut self, message: impl Into<String>) {
         let message = message.into();
@@ -139,6 +142,7 @@ impl Stats {
         }
     }
 
+    /// Records a stage that was skipped, with the reason.
     pub fn skip(&mut self, name: &str, reason: impl Into<String>) {
         self.stages.push(Stage { name: name.into(), ran: false, reason: reason.into(), seconds: 0.0 });
     }

@@ -103,6 +103,7 @@ fn caustic_flux(s: &Scene, accel: &AnyAccel, aim: bool, n: u64, seed: u64) -> (f
         max_bounces: 64,
         targets: &targets,
         aim,
+        guide: None,
         seed,
     };
     let out = photonmap::dispatch!(accel, a => trace::trace_pass(s, a, &lights, &spec, &Quiet));

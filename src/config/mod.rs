@@ -121,6 +121,8 @@ pub struct PhotonPasses {
     pub caustic_aim: bool,
     /// Whether the caustic pass runs: as the scene analysis decides, always, or never.
     pub caustic_pass: CausticPass,
+    /// Whether indirect photons may be guided toward what the camera sees (`photon::guide`).
+    pub guide: bool,
 }
 
 /// The k-nearest-photon gathers.

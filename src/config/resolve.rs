@@ -38,6 +38,7 @@ impl RenderSettings {
             color: self.color.unwrap_or(ColorMode::Rgb),
             caustic_aim: self.caustic_aim.unwrap_or(true),
             caustic_pass: self.caustic_pass.unwrap_or_default(),
+            guide: self.photon_guide.unwrap_or(true),
         };
         let gathers = Gathers {
             gather_photons: self.gather_photons.unwrap_or(if sppm { SPPM_GATHER_PHOTONS } else { 100 }),

@@ -151,4 +151,8 @@ settings! {
     /// Run the caustic photon pass when the scene analysis says it is needed (auto), always (on)
     /// or never (off) [default: auto].
     caustic_pass: CausticPass,
+    /// Guide photon emission toward what the camera sees when a pilot finds that few photons
+    /// get there (a sun through a small window, a light behind a door); false: emit as usual
+    /// [default: true].
+    photon_guide: bool,
 }

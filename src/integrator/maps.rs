@@ -7,9 +7,11 @@ use crate::accel::Accel;
 use crate::config::{CausticPass, ColorMode, Gathers, PhotonPasses};
 use crate::frame::{Frame, Progress};
 use crate::light::LightSet;
+use crate::photon::guide::{EmissionGuide, EmitterPilot, VisibleRegion, GUIDE_BELOW, GUIDE_GAIN};
 use crate::photon::irradiance::{self, SitePoint};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
 use crate::photon::trace::{self, Pass, PassSpec, Target};
+use crate::sampling::derive_seed;
 use crate::scene::Scene;
 use crate::stats::Stats;
 use glam::Vec3;
@@ -26,6 +28,16 @@ pub struct Analysis {
     /// Where caustic photons are aimed and the share of emission that reaches there, worked
     /// out at the first caustic pass (with its seed) and kept for the passes after it.
     aim: OnceCell<Aim>,
+    /// What the camera sees and where photons are sent, worked out at the first photon pass.
+    guide: OnceCell<Guide>,
+}
+
+/// The region the camera sees (for the maps' efficiency) and, when a pilot found that few
+/// photons reach it, the emission guided there.
+#[derive(Clone, Debug, Default)]
+struct Guide {
+    region: VisibleRegion,
+    emission: Option<EmissionGuide>,
 }
 
 /// The specular targets of aimed caustic photons, and the share of emission aimed at them (0:
@@ -50,6 +62,7 @@ impl Analysis {
             has_diffuse: any(|m| m.is_diffuse_like()),
             light_power: lights.total_power(),
             aim: OnceCell::new(),
+            guide: OnceCell::new(),
         }
     }
 
@@ -63,6 +76,11 @@ impl Analysis {
 /// over, while none is aimed at a target (a 1 cm marble 2 m from a point light takes one in
 /// about 600 000; 65 536 tries found none and its caustic vanished).
 const ACCEPTANCE_TRIES: [u64; 3] = [1 << 16, 1 << 20, 1 << 24];
+
+/// Photons of the first pilot of guided emission: an eighth of the pass's budget within these bounds;
+/// the pilot grows 4 times over, up to the last, while it sees fewer than [`PILOT_SEEN`].
+const PILOT_PHOTONS: [u64; 3] = [1 << 16, 1 << 20, 1 << 23];
+const PILOT_SEEN: u64 = 300;
 
 /// Which maps an integrator reads, and how they are traced.
 #[derive(Clone, Copy, Debug)]
@@ -115,8 +133,14 @@ impl MapStages<'_> {
             stats.skip("photons.indirect", why);
             return (Vec::new(), Vec::new());
         }
+        let guide = analysis.guide.get_or_init(|| self.guide(frame, seed, stats));
         progress.start("indirect photons", p.photons);
-        let out = stats.run("photons.indirect", "diffuse surfaces and lit scene", |_| {
+        let why = if guide.emission.is_some() {
+            "diffuse surfaces and lit scene; emission guided toward what the camera sees"
+        } else {
+            "diffuse surfaces and lit scene"
+        };
+        let out = stats.run("photons.indirect", why, |_| {
             let spec = PassSpec {
                 pass: Pass::Indirect,
                 n: p.photons,
@@ -124,6 +148,7 @@ impl MapStages<'_> {
                 max_bounces: p.max_bounces,
                 targets: &[],
                 aim: false,
+                guide: guide.emission.as_ref(),
                 seed,
             };
             trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
@@ -136,9 +161,90 @@ impl MapStages<'_> {
             Some(stride) => irradiance::pick_sites(&out.maps, stride * out.maps.len()),
             None => Vec::new(),
         };
+        let seen = count_seen(&out, &guide.region);
         let maps = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, p.color));
-        record_maps(stats, "indirect", &maps);
+        record_maps(stats, "indirect", &maps, &seen);
         (drop_empty(stats, "indirect", maps), sites)
+    }
+
+    /// The region the camera sees and, unless `--photon-guide false` or the photons reach it
+    /// well enough already, the guided emission learnt from a pilot (a stage of its own).
+    fn guide<A: Accel>(&self, frame: &Frame<'_, A>, seed: u64, stats: &mut Stats) -> Guide {
+        let p = self.passes;
+        let region = VisibleRegion::of(frame, seed);
+        let why_not = if !p.guide {
+            Some("off (--photon-guide false)".to_string())
+        } else if region.is_empty() {
+            Some("the camera sees no surface".to_string())
+        } else {
+            None
+        };
+        if let Some(why) = why_not {
+            stats.skip("photons.guide", why);
+            return Guide { region, emission: None };
+        }
+        let kinds = trace::guided_kinds(frame.lights);
+        let (emission, reason) = stats.run("photons.guide", "", |stats| {
+            let mut pilot = Vec::new();
+            let mut n = 0u64;
+            let run_pilot = |stats: &mut Stats, photons: u64, guide: Option<&EmissionGuide>, n: u64| {
+                let (run, rays) = trace::pilot(
+                    frame.scene,
+                    frame.accel,
+                    frame.lights,
+                    photons,
+                    p.max_bounces,
+                    &region,
+                    guide,
+                    derive_seed(seed, 0x9170, n),
+                );
+                stats.rays.photon += rays;
+                run
+            };
+            // Uniform pilots, growing while too few of their photons are seen to learn from.
+            let first = (p.photons / 8).clamp(PILOT_PHOTONS[0], PILOT_PHOTONS[1]);
+            let mut size = first;
+            loop {
+                let run = run_pilot(stats, size - n, None, n);
+                n = size;
+                merge_pilot(&mut pilot, run);
+                let (emitted, seen) = efficiency(&pilot);
+                if seen >= PILOT_SEEN || seen as f64 >= GUIDE_BELOW * emitted as f64 || size >= PILOT_PHOTONS[2] {
+                    break;
+                }
+                size = (size * 4).min(PILOT_PHOTONS[2]);
+            }
+            let (emitted, seen) = efficiency(&pilot);
+            let share = if emitted > 0 { seen as f64 / emitted as f64 } else { 0.0 };
+            let found = format!(
+                "pilot of {n} photons: {share:.3e} photons stored where the camera looks per photon (cells of {:.3e})",
+                region.cell()
+            );
+            if share >= GUIDE_BELOW {
+                return (None, format!("{found}; no guiding needed"));
+            }
+            // A second pilot of `first` photons sent where the first found seen photons, which
+            // sharpens the guide where the first saw only a few.
+            let Some(coarse) = EmissionGuide::learn(&pilot, &kinds) else {
+                return (None, format!("{found}; nothing to guide toward"));
+            };
+            let run = run_pilot(stats, first, Some(&coarse), n);
+            let (emitted2, seen2) = efficiency(&run);
+            let share2 = if emitted2 > 0 { seen2 as f64 / emitted2 as f64 } else { 0.0 };
+            let tried = format!("{found}; a guided pilot of {first}: {share2:.3e}");
+            if share2 < GUIDE_GAIN * share {
+                return (None, format!("{tried}, too little gain to guide"));
+            }
+            merge_pilot(&mut pilot, run);
+            match EmissionGuide::learn(&pilot, &kinds) {
+                Some(g) => (Some(g), format!("{tried}; emission guided there")),
+                None => (Some(coarse), format!("{tried}; emission guided there")),
+            }
+        });
+        if let Some(stage) = stats.stages.last_mut() {
+            stage.reason = reason;
+        }
+        Guide { region, emission }
     }
 
     /// Why the caustic pass does not run, if it does not: the scene analysis, overridden by
@@ -203,8 +309,7 @@ impl MapStages<'_> {
             // Tries such that about `caustic_photons` photons are aimed at the targets.
             let tries = ((p.caustic_photons as f64 / acceptance).ceil() as u64)
                 .min(p.caustic_photons.saturating_mul(1000));
-            let share = 100.0 * acceptance;
-            let share = if share >= 0.01 { format!("{share:.2}%") } else { format!("{share:.1e}%") };
+            let share = percent(acceptance);
             let reason =
                 format!("{} specular targets, {share} of emission aimed at them{forced}", targets.len());
             (tries, reason)
@@ -233,14 +338,17 @@ impl MapStages<'_> {
                 max_bounces: p.max_bounces,
                 targets,
                 aim,
+                guide: None,
                 seed: seed ^ 0x5EED,
             };
             trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
         });
         progress.finish();
         stats.rays.photon += out.rays;
+        let region = &analysis.guide.get_or_init(|| self.guide(frame, seed, stats)).region;
+        let seen = count_seen(&out, region);
         let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
-        record_maps(stats, "caustic", &maps);
+        record_maps(stats, "caustic", &maps, &seen);
         drop_empty(stats, "caustic", maps)
     }
 }
@@ -300,7 +408,41 @@ fn drop_empty(stats: &mut Stats, kind: &str, mut maps: Vec<PhotonMap>) -> Vec<Ph
     maps
 }
 
-fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
+/// Photons of each map of `out` stored inside `region`.
+fn count_seen(out: &trace::PassOutput, region: &VisibleRegion) -> Vec<u64> {
+    out.maps.iter().map(|m| m.iter().filter(|h| region.contains(h.pos)).count() as u64).collect()
+}
+
+/// Photons a pilot emitted, and the seen photons it stored.
+fn efficiency(pilot: &[EmitterPilot]) -> (u64, u64) {
+    pilot.iter().fold((0, 0), |(a, b), e| (a + e.emitted, b + e.seen))
+}
+
+/// Adds the pilot `run` to `pilot`, emitter by emitter.
+fn merge_pilot(pilot: &mut Vec<EmitterPilot>, run: Vec<EmitterPilot>) {
+    if pilot.is_empty() {
+        *pilot = run;
+        return;
+    }
+    for (p, r) in pilot.iter_mut().zip(run) {
+        p.emitted += r.emitted;
+        p.stored += r.stored;
+        p.seen += r.seen;
+        p.samples.extend(r.samples);
+    }
+}
+
+/// A share as a percentage with enough digits to be told from zero.
+fn percent(share: f64) -> String {
+    let pc = 100.0 * share;
+    if pc >= 0.01 || pc == 0.0 {
+        format!("{pc:.2}%")
+    } else {
+        format!("{pc:.1e}%")
+    }
+}
+
+fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap], seen: &[u64]) {
     let names = ["r", "g", "b"];
     for (i, m) in maps.iter().enumerate() {
         let name = if maps.len() == 1 { kind.to_string() } else { format!("{kind}.{}", names[i]) };
@@ -308,6 +450,8 @@ fn record_maps(stats: &mut Stats, kind: &str, maps: &[PhotonMap]) {
         let e = stats.photons.entry(name).or_default();
         e.emitted += m.emitted;
         e.stored += m.len() as u64;
+        e.seen += seen.get(i).copied().unwrap_or(0);
+        e.efficiency = if e.emitted > 0 { e.seen as f64 / e.emitted as f64 } else { 0.0 };
         e.bytes = e.bytes.max(m.bytes() as u64);
     }
 }

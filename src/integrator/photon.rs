@@ -115,7 +115,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             )
         });
         let bytes = irradiance.bytes() as u64;
-        let record = MapStats { emitted: 0, stored: irradiance.len() as u64, bytes };
+        let record = MapStats { stored: irradiance.len() as u64, bytes, ..Default::default() };
         stats.photons.insert("irradiance_cache".into(), record);
         irradiance
     }

@@ -29,6 +29,7 @@
 //! Compared with Jensen's 28 B that is ~29% less memory and bandwidth for the gather, which is
 //! memory-bound.
 
+pub mod guide;
 pub mod irradiance;
 pub mod kdtree;
 pub mod map;

@@ -21,15 +21,21 @@
 //!   per photon traced.
 //! * The indirect map holds photons with at least one diffuse bounce behind them.
 //!
+//! * Guided emission ([`super::guide`]): when a pilot of photons found that few reach what the
+//!   camera sees, the budget is split by a mix of seen photons and power, and each emitter's
+//!   position (distant lights) or direction (the others) follows the learnt density; each
+//!   photon's power is divided by its sample's density, so the estimates keep their value.
+//!
 //! Work is split into fixed chunks, each with its own generator seeded from (seed, pass, chunk),
 //! so the maps are identical for any number of threads.
 
+use super::guide::{EmissionGuide, EmitterPilot, Grid2, Guided, VisibleRegion, DEFENSIVE};
 use super::map::PhotonHit;
 use crate::accel::Accel;
 use crate::config::ColorMode;
 use crate::frame::Progress;
 use crate::geometry::{offset_ray_origin, Ray};
-use crate::light::{Emitter, LightSet};
+use crate::light::{Emitter, Light, LightSet};
 use crate::material::{face_forward, LobeKind};
 use crate::sampling::derive_seed;
 use crate::scene::Scene;
@@ -157,12 +163,14 @@ impl EmitterShare {
     }
 }
 
-/// Splits `n` photons among emitters by power, per map. Returns the shares and the photons
-/// allotted to each map.
+/// Splits `n` photons among emitters by power, per map, or with `seen` (each emitter's share of
+/// the photons a pilot saw) by `DEFENSIVE` of power and the rest by `seen`. Returns the shares
+/// and the photons allotted to each map.
 fn allocate(
     emitters: &[Emitter],
     n: u64,
     color: ColorMode,
+    seen: Option<&[f64]>,
     rng: &mut Pcg32,
 ) -> (Vec<EmitterShare>, Vec<u64>) {
     let mut shares = Vec::new();
@@ -181,18 +189,28 @@ fn allocate(
         if !(total > 0.0) || n_map == 0 {
             continue;
         }
+        // The seen shares of the emitters that emit in this map.
+        let seen_total: f64 = seen
+            .map_or(0.0, |s| emitters.iter().zip(s).filter(|(e, _)| weight(e) > 0.0).map(|(_, &s)| s).sum());
         for (i, e) in emitters.iter().enumerate() {
             let w = weight(e) as f64;
             if !(w > 0.0) {
                 continue;
             }
-            let expected = n_map as f64 * w / total;
+            // The expected photons of this emitter, and one over them.
+            let (expected, scale) = match seen {
+                Some(s) if seen_total > 0.0 => {
+                    let d = DEFENSIVE as f64;
+                    let expected = n_map as f64 * ((1.0 - d) * s[i] / seen_total + d * w / total);
+                    (expected, 1.0 / expected)
+                }
+                _ => (n_map as f64 * w / total, (total / n_map as f64) / w),
+            };
             let count = expected.floor() as u64 + u64::from(rng.gen::<f64>() < expected.fract());
             if count == 0 {
                 continue;
             }
-            // One over the photons expected from this emitter: `n_map w / total`.
-            let scale = ((total / n_map as f64) / w) as f32;
+            let scale = scale as f32;
             emitted[map] += count;
             shares.push(EmitterShare { emitter: i, map, channel, count, scale });
         }
@@ -212,7 +230,109 @@ pub struct PassSpec<'a> {
     pub targets: &'a [Target],
     /// Whether a caustic pass keeps only emission samples aimed at `targets`.
     pub aim: bool,
+    /// Where the photons of an indirect pass are sent ([`super::guide`]); `None`: as emitted.
+    pub guide: Option<&'a EmissionGuide>,
     pub seed: u64,
+}
+
+/// The photon chunks of `shares`: (share, first photon, end).
+fn chunks(shares: &[EmitterShare]) -> Vec<(usize, u64, u64)> {
+    let mut chunks = Vec::new();
+    for (j, share) in shares.iter().enumerate() {
+        let mut start = 0;
+        while start < share.count {
+            let end = (start + CHUNK).min(share.count);
+            chunks.push((j, start, end));
+            start = end;
+        }
+    }
+    chunks
+}
+
+/// Which of an emitter's sample dimensions guiding reshapes.
+fn guided_dims(lights: &LightSet, e: &Emitter) -> Guided {
+    match lights.lights()[e.light] {
+        Light::Distant(_) => Guided::Position,
+        _ => Guided::Direction,
+    }
+}
+
+/// A pilot of `n` photons of an indirect pass, split among emitters by power and emitted as
+/// usual or, with `guide`, as its grids say: for each emitter, the photons emitted and stored
+/// and, per path, its guided sample and the photons it stored inside `region` over the
+/// sample's density. Also returns the rays traced.
+#[allow(clippy::too_many_arguments)]
+pub fn pilot<A: Accel>(
+    scene: &Scene,
+    accel: &A,
+    lights: &LightSet,
+    n: u64,
+    max_bounces: u32,
+    region: &VisibleRegion,
+    guide: Option<&EmissionGuide>,
+    seed: u64,
+) -> (Vec<EmitterPilot>, u64) {
+    let emitters = lights.emitters();
+    let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, 0x9170, u64::MAX));
+    let (shares, _) = allocate(emitters, n, ColorMode::Rgb, None, &mut alloc_rng);
+    let chunks = chunks(&shares);
+    // Per chunk: the emitter, its pilot, and the rays traced.
+    let results: Vec<(usize, EmitterPilot, u64)> = chunks
+        .par_iter()
+        .enumerate()
+        .map(|(ci, &(j, start, end))| {
+            let share = &shares[j];
+            let e = &emitters[share.emitter];
+            let dims = guided_dims(lights, e);
+            let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0x9170, ci as u64));
+            let strata = Strata::new(share.count);
+            let grid = guide.and_then(|g| g.grids[share.emitter].as_ref());
+            let (mut samples, mut rays, mut stored) = (Vec::new(), 0u64, Vec::new());
+            let (mut total, mut seen_total) = (0u64, 0u64);
+            for i in start..end {
+                let (u_pos, u_dir, density) = emission_samples(&strata, i, grid, &mut rng);
+                let Some(em) = lights.sample_emission(e, u_pos, u_dir) else { continue };
+                stored.clear();
+                let power = share.photon_power(em.power) / density;
+                rays += trace_photon(
+                    scene,
+                    accel,
+                    Pass::Indirect,
+                    em.origin,
+                    em.dir,
+                    power,
+                    None,
+                    max_bounces,
+                    &mut rng,
+                    &mut stored,
+                );
+                total += stored.len() as u64;
+                let seen = stored.iter().filter(|h| region.contains(h.pos)).count();
+                seen_total += seen as u64;
+                let seen = seen as f32;
+                let weight = seen / density / n as f32;
+                samples.push((if dims == Guided::Position { u_pos } else { u_dir }, weight));
+            }
+            (share.emitter, EmitterPilot { emitted: 0, stored: total, seen: seen_total, samples }, rays)
+        })
+        .collect();
+    let mut out = vec![EmitterPilot::default(); emitters.len()];
+    for share in &shares {
+        out[share.emitter].emitted += share.count;
+    }
+    let mut rays = 0;
+    for (e, chunk, r) in results {
+        out[e].samples.extend(chunk.samples);
+        out[e].stored += chunk.stored;
+        out[e].seen += chunk.seen;
+        rays += r;
+    }
+    (out, rays)
+}
+
+/// The guided dimensions of every emitter, in the order of [`LightSet::emitters`].
+pub fn guided_kinds(lights: &LightSet) -> Vec<Guided> {
+    lights.emitters().iter().map(|e| guided_dims(lights, e)).collect()
 }
 
 /// Traces one pass; `progress` advances by the photons of each finished chunk.
@@ -223,20 +343,12 @@ pub fn trace_pass<A: Accel>(
     spec: &PassSpec<'_>,
     progress: &dyn Progress,
 ) -> PassOutput {
-    let PassSpec { pass, n, color, max_bounces, targets, aim, seed } = *spec;
+    let PassSpec { pass, n, color, max_bounces, targets, aim, guide, seed } = *spec;
     let emitters = lights.emitters();
     let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, u64::MAX));
-    let (shares, emitted) = allocate(emitters, n, color, &mut alloc_rng);
+    let (shares, emitted) = allocate(emitters, n, color, guide.map(|g| &g.seen_share[..]), &mut alloc_rng);
     // Fixed chunks over the concatenated shares.
-    let mut chunks: Vec<(usize, u64, u64)> = Vec::new();
-    for (j, share) in shares.iter().enumerate() {
-        let mut start = 0;
-        while start < share.count {
-            let end = (start + CHUNK).min(share.count);
-            chunks.push((j, start, end));
-            start = end;
-        }
-    }
+    let chunks = chunks(&shares);
     let n_maps = emitted.len();
     let results: Vec<(Vec<Vec<PhotonHit>>, u64, u64)> = chunks
         .par_iter()
@@ -248,9 +360,10 @@ pub fn trace_pass<A: Accel>(
             let (mut rays, mut paths) = (0u64, 0u64);
             let e = &emitters[share.emitter];
             let strata = Strata::new(share.count);
+            let grid = guide.and_then(|g| g.grids[share.emitter].as_ref());
             for i in start..end {
-                let u_pos = strata.sample(i, &mut rng);
-                let Some(em) = lights.sample_emission(e, u_pos, [rng.gen(), rng.gen()]) else { continue };
+                let (u_pos, u_dir, density) = emission_samples(&strata, i, grid, &mut rng);
+                let Some(em) = lights.sample_emission(e, u_pos, u_dir) else { continue };
                 if pass == Pass::Caustic && aim && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
                     continue;
                 }
@@ -261,7 +374,7 @@ pub fn trace_pass<A: Accel>(
                     pass,
                     em.origin,
                     em.dir,
-                    share.photon_power(em.power),
+                    share.photon_power(em.power) / density,
                     share.channel,
                     max_bounces,
                     &mut rng,
@@ -281,6 +394,30 @@ pub fn trace_pass<A: Accel>(
         output.paths += paths;
     }
     output
+}
+
+/// The position and direction samples of photon `i` of an emitter, reshaped by its guide grid
+/// if it has one, and the density of the reshaped sample (1 without a grid).
+#[inline]
+fn emission_samples(
+    strata: &Strata,
+    i: u64,
+    grid: Option<&(Guided, Grid2)>,
+    rng: &mut Pcg32,
+) -> ([f32; 2], [f32; 2], f32) {
+    let u_pos = strata.sample(i, rng);
+    let u_dir = [rng.gen(), rng.gen()];
+    match grid {
+        None => (u_pos, u_dir, 1.0),
+        Some((Guided::Position, g)) => {
+            let (u, d) = g.sample(u_pos);
+            (u, u_dir, d)
+        }
+        Some((Guided::Direction, g)) => {
+            let (u, d) = g.sample(u_dir);
+            (u_pos, u, d)
+        }
+    }
 }
 
 /// Follows one photon, storing copies at diffuse hits as `pass` requires. Returns rays cast.
@@ -373,7 +510,7 @@ pub fn target_acceptance(lights: &LightSet, targets: &[Target], tries: u64, seed
     }
     let emitters = lights.emitters();
     let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 7, 7));
-    let (shares, _) = allocate(emitters, tries, ColorMode::Rgb, &mut rng);
+    let (shares, _) = allocate(emitters, tries, ColorMode::Rgb, None, &mut rng);
     let (mut accepted, mut total) = (0u64, 0u64);
     for share in &shares {
         let strata = Strata::new(share.count);

@@ -1,0 +1,391 @@
+//! Photons where the camera looks: the region of the scene the camera sees, and emission
+//! guided toward it.
+//!
+//! A photon is only ever read near a surface the camera sees (through mirrors and glass): a
+//! photon stored anywhere else is work thrown away. In a room lit by the sun through a small
+//! window almost every photon lands outside; with a light behind a door, most land in the
+//! wrong room. Two pieces address it:
+//!
+//! * [`VisibleRegion`]: the cells of a uniform grid around the points a coarse pilot of camera
+//!   rays lands on (64 rays across the long side of the image, each followed through mirrors
+//!   and glass), grown by one cell on every side. Photons stored inside count as *seen*; their
+//!   share of the photons emitted is the map's efficiency in `--stats`.
+//! * [`EmissionGuide`]: learnt from a pilot of photons traced as usual, it tells each emitter
+//!   which of its emission samples lead to seen photons (after Hachisuka and Jensen 2011,
+//!   "Robust adaptive photon tracing using photon path visibility", whose target is the same
+//!   set of paths; here the paths are found by importance sampling the emission instead of by
+//!   a Markov chain, so photons stay independent and a pass depends only on its seed). Each
+//!   emitter's two guided sample dimensions (the position on a distant light's disc, the
+//!   direction of every other light) get a piecewise-constant density on a grid of cells: a
+//!   mixture of the counts of seen photons at the grid's resolution and at coarser ones
+//!   ([`LEVELS`]), and a uniform share ([`DEFENSIVE`]) so that no sample has zero density. The
+//!   fine level finds a small window; the coarse ones keep a fair share for the many paths
+//!   that each reach the camera's view rarely (sunlight off the ground outside, in through the
+//!   window), which the pilot sees too sparsely to place finely, and which, sampled only at
+//!   the uniform share, would come as a few photons of great power. The photon budget is split among
+//!   emitters by the same mixture of seen photons and power. Each photon's power is divided by
+//!   the density of its sample, so every estimate keeps its expected value: guiding changes
+//!   the noise, not the answer.
+//!
+//! Guiding runs only where it pays: when the pilot's photons store at least [`GUIDE_BELOW`]
+//! seen photons each already, or a guided pilot does not do [`GUIDE_GAIN`] times better, the
+//! emission stays as it is.
+
+use crate::accel::Accel;
+use crate::frame::specular::{walk, Start};
+use crate::frame::{Counters, Frame};
+use crate::sampling::derive_seed;
+use glam::Vec3;
+use rand::SeedableRng;
+use rand_pcg::Pcg32;
+use std::collections::HashSet;
+
+/// Camera rays across the long side of the image in the pilot that finds the seen region.
+const PILOT_SIDE: u32 = 64;
+
+/// Share of each guided density (and of the photon split) kept uniform (by power).
+pub const DEFENSIVE: f32 = 0.15;
+
+/// Guiding runs when the pilot's photons store fewer seen photons than this per photon emitted,
+/// and only if a guided pilot stores at least [`GUIDE_GAIN`] times as many (where photons
+/// scatter far from where they were aimed, as in a white furnace, aiming them changes little).
+pub const GUIDE_BELOW: f64 = 0.5;
+pub const GUIDE_GAIN: f64 = 1.5;
+
+/// Cells a side of a distant light's guided disc, and of every other emitter's directions.
+const DISC_CELLS: usize = 512;
+const DIRECTION_CELLS: usize = 32;
+
+/// The levels of the mixture: cells merged a side (1: the grid's own) and share of the density.
+/// With [`DEFENSIVE`] the shares add up to 1.
+pub const LEVELS: [(usize, f32); 3] = [(1, 0.45), (8, 0.25), (64, 0.15)];
+
+/// Pilot photons an emitter needs before its samples are guided (fewer: uniform).
+const MIN_PILOT: u64 = 1024;
+
+/// Cells of space near what the camera sees.
+#[derive(Clone, Debug, Default)]
+pub struct VisibleRegion {
+    cell: f32,
+    origin: Vec3,
+    cells: HashSet<[i32; 3]>,
+}
+
+impl VisibleRegion {
+    /// The region seen by a pilot of camera rays through `frame` (see the module doc). The
+    /// cell is twice the median footprint of a pilot ray where it lands.
+    pub fn of<A: Accel>(frame: &Frame<'_, A>, seed: u64) -> Self {
+        let cam = &frame.camera;
+        let (w, h) = (cam.width as f32, cam.height as f32);
+        let scale = PILOT_SIDE as f32 / w.max(h);
+        let (sw, sh) = (((w * scale).round() as u32).max(1), ((h * scale).round() as u32).max(1));
+        let (dx, dy) = (w / sw as f32, h / sh as f32);
+        let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0x5EE_4E61, 0));
+        let mut c = Counters::default();
+        let mut landings = Vec::with_capacity((sw * sh) as usize);
+        for j in 0..sh {
+            for i in 0..sw {
+                let (x, y) = ((i as f32 + 0.5) * dx, (j as f32 + 0.5) * dy);
+                let ray = cam.ray(x, y);
+                // The angle between this ray and its neighbour one pilot cell away.
+                let spread =
+                    (cam.ray(x + dx, y + dy).dir - ray.dir).length() * std::f32::consts::FRAC_1_SQRT_2;
+                let landing =
+                    walk(frame, Start::Ray(ray), Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
+                if let Some(l) = landing {
+                    landings.push((l.hit.p, (l.hit.p - cam.eye).length() * spread));
+                }
+            }
+        }
+        if landings.is_empty() {
+            return VisibleRegion::default();
+        }
+        let mut footprints: Vec<f32> = landings.iter().map(|l| l.1).filter(|f| f.is_finite()).collect();
+        footprints.sort_by(f32::total_cmp);
+        let extent = frame.scene.bounds().bounding_sphere().1;
+        let median = footprints.get(footprints.len() / 2).copied().unwrap_or(0.0);
+        let cell = (2.0 * median).max(1e-5 * extent);
+        if !(cell.is_finite() && cell > 0.0) {
+            return VisibleRegion::default();
+        }
+        let origin = landings[0].0;
+        let mut region = VisibleRegion { cell, origin, cells: HashSet::new() };
+        for (p, _) in landings {
+            let [x, y, z] = region.key(p);
+            for k in -1..=1 {
+                for j in -1..=1 {
+                    for i in -1..=1 {
+                        region.cells.insert([x + i, y + j, z + k]);
+                    }
+                }
+            }
+        }
+        region
+    }
+
+    fn key(&self, p: Vec3) -> [i32; 3] {
+        let q = ((p - self.origin) / self.cell).floor();
+        [q.x as i32, q.y as i32, q.z as i32]
+    }
+
+    /// Whether `p` lies in the region.
+    #[inline]
+    pub fn contains(&self, p: Vec3) -> bool {
+        !self.cells.is_empty() && self.cells.contains(&self.key(p))
+    }
+
+    /// Whether the pilot saw nothing (no surface in view).
+    pub fn is_empty(&self) -> bool {
+        self.cells.is_empty()
+    }
+
+    /// The cell side, scene units.
+    pub fn cell(&self) -> f32 {
+        self.cell
+    }
+}
+
+/// A piecewise-constant density over `[0, 1)²` on a `side × side` grid, sampled by inverting
+/// its CDF (rows, then the cell within the row), so stratified inputs stay stratified.
+#[derive(Clone, Debug)]
+pub struct Grid2 {
+    side: usize,
+    /// Probability of each row, and of each cell within its row, as CDFs.
+    rows: Vec<f32>,
+    cells: Vec<f32>,
+    /// Density of each cell (probability × side²).
+    density: Vec<f32>,
+}
+
+impl Grid2 {
+    /// The density proportional to `weights` (row-major, `side²` non-negative values, some
+    /// positive).
+    pub fn new(side: usize, weights: &[f32]) -> Self {
+        let total: f64 = weights.iter().map(|&w| w as f64).sum();
+        let cells_n = (side * side) as f32;
+        let density = weights.iter().map(|&w| (w as f64 / total) as f32 * cells_n).collect();
+        let mut rows = vec![0.0f32; side + 1];
+        let mut cells = vec![0.0f32; side * (side + 1)];
+        for r in 0..side {
+            let row = &weights[r * side..(r + 1) * side];
+            let row_total: f64 = row.iter().map(|&w| w as f64).sum();
+            rows[r + 1] = rows[r] + (row_total / total) as f32;
+            let cdf = &mut cells[r * (side + 1)..(r + 1) * (side + 1)];
+            let mut acc = 0.0f64;
+            for (c, &w) in row.iter().enumerate() {
+                acc += w as f64;
+                cdf[c + 1] =
+                    if row_total > 0.0 { (acc / row_total) as f32 } else { (c + 1) as f32 / side as f32 };
+            }
+        }
+        rows[side] = 1.0;
+        Grid2 { side, rows, cells, density }
+    }
+
+    /// Maps a uniform `u` to a sample of the density; returns it with its density.
+    #[inline]
+    pub fn sample(&self, u: [f32; 2]) -> ([f32; 2], f32) {
+        let n = self.side;
+        let (r, fr) = invert(&self.rows, u[0]);
+        let (c, fc) = invert(&self.cells[r * (n + 1)..(r + 1) * (n + 1)], u[1]);
+        let out =
+            [(r as f32 + fr) / n as f32, (c as f32 + fc) / n as f32].map(|v| v.min(1.0 - f32::EPSILON / 2.0));
+        (out, self.density[r * n + c])
+    }
+
+    /// The cell of a sample (the inverse of the grid's layout, for counting).
+    fn cell_of(side: usize, u: [f32; 2]) -> usize {
+        let i = |v: f32| ((v * side as f32) as usize).min(side - 1);
+        i(u[0]) * side + i(u[1])
+    }
+}
+
+/// The interval `i` of the CDF `cdf` (`cdf[i] <= u < cdf[i + 1]`, a positive interval) and
+/// where `u` falls within it.
+#[inline]
+fn invert(cdf: &[f32], u: f32) -> (usize, f32) {
+    let n = cdf.len() - 1;
+    let u = u.clamp(0.0, cdf[n] * (1.0 - f32::EPSILON));
+    // The first entry above `u`, minus one: `cdf[i] <= u < cdf[i + 1]`, a positive interval.
+    let i = cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
+    let (lo, hi) = (cdf[i], cdf[i + 1]);
+    let f = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.5 };
+    (i, f)
+}
+
+/// Which two sample dimensions of an emitter are guided.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Guided {
+    /// The position on the emitter (a distant light's disc).
+    Position,
+    /// The emission direction (point, spot and area lights).
+    Direction,
+}
+
+impl Guided {
+    fn side(self) -> usize {
+        match self {
+            Guided::Position => DISC_CELLS,
+            Guided::Direction => DIRECTION_CELLS,
+        }
+    }
+}
+
+/// What the pilot learnt about one emitter: photons emitted and stored, and for each guided
+/// sample the seen photons its path stored over the sample's density and over the pilot's
+/// photons (so that the samples of pilots of any size, guided or not, add up as one estimate).
+#[derive(Clone, Debug, Default)]
+pub struct EmitterPilot {
+    pub emitted: u64,
+    pub stored: u64,
+    /// Of the photons stored, those inside the region.
+    pub seen: u64,
+    pub samples: Vec<([f32; 2], f32)>,
+}
+
+/// Per emitter: its share of the photon budget and, when guided, the density of its guided
+/// sample dimensions.
+#[derive(Clone, Debug)]
+pub struct EmissionGuide {
+    /// Seen photons per emitter over all seen photons (sums to 1).
+    pub seen_share: Vec<f64>,
+    pub grids: Vec<Option<(Guided, Grid2)>>,
+}
+
+impl EmissionGuide {
+    /// The guide learnt from `pilot` (one entry per emitter, `kinds[e]` its guided
+    /// dimensions); `None` when no pilot photon was seen.
+    pub fn learn(pilot: &[EmitterPilot], kinds: &[Guided]) -> Option<Self> {
+        let seen: Vec<f64> =
+            pilot.iter().map(|p| p.samples.iter().map(|s| s.1 as f64).sum::<f64>()).collect();
+        let total: f64 = seen.iter().sum();
+        if !(total > 0.0) {
+            return None;
+        }
+        let grids = pilot
+            .iter()
+            .zip(kinds)
+            .zip(&seen)
+            .map(|((p, &kind), &s)| {
+                if p.emitted < MIN_PILOT || !(s > 0.0) {
+                    return None;
+                }
+                let side = kind.side();
+                let mut counts = vec![0.0f32; side * side];
+                for &(u, w) in &p.samples {
+                    counts[Grid2::cell_of(side, u)] += w;
+                }
+                let mut weights = vec![DEFENSIVE / (side * side) as f32; side * side];
+                for (merge, share) in LEVELS {
+                    let merge = merge.min(side);
+                    let level = if merge == 1 { fill(&counts, side) } else { coarsen(&counts, side, merge) };
+                    let sum: f32 = level.iter().sum();
+                    for (w, l) in weights.iter_mut().zip(&level) {
+                        *w += share * l / sum;
+                    }
+                }
+                Some((kind, Grid2::new(side, &weights)))
+            })
+            .collect();
+        Some(EmissionGuide { seen_share: seen.iter().map(|s| s / total).collect(), grids })
+    }
+}
+
+/// `counts` summed over blocks of `merge × merge` cells and spread evenly over each block.
+fn coarsen(counts: &[f32], side: usize, merge: usize) -> Vec<f32> {
+    let blocks = side.div_ceil(merge);
+    let mut sums = vec![0.0f32; blocks * blocks];
+    let block = |r: usize, c: usize| (r / merge) * blocks + c / merge;
+    for r in 0..side {
+        for c in 0..side {
+            sums[block(r, c)] += counts[r * side + c];
+        }
+    }
+    let mut out = vec![0.0f32; counts.len()];
+    for r in 0..side {
+        for c in 0..side {
+            let rows = merge.min(side - (r / merge) * merge);
+            let cols = merge.min(side - (c / merge) * merge);
+            out[r * side + c] = sums[block(r, c)] / (rows * cols) as f32;
+        }
+    }
+    out
+}
+
+/// Each cell of `counts` at least half the mean of its 3 × 3 neighbourhood (clamped at the
+/// borders): a cell the pilot missed amid seen ones keeps a fair density, while the seen
+/// cells keep their sharp edges.
+fn fill(counts: &[f32], side: usize) -> Vec<f32> {
+    let mut out = vec![0.0f32; counts.len()];
+    for r in 0..side {
+        for c in 0..side {
+            let (mut s, mut n) = (0.0, 0.0);
+            for rr in r.saturating_sub(1)..(r + 2).min(side) {
+                for cc in c.saturating_sub(1)..(c + 2).min(side) {
+                    s += counts[rr * side + cc];
+                    n += 1.0;
+                }
+            }
+            out[r * side + c] = counts[r * side + c].max(0.5 * s / n);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::Rng;
+
+    #[test]
+    fn grid_samples_follow_the_density_and_report_it() {
+        let side = 8;
+        let mut weights = vec![1.0f32; side * side];
+        weights[3 * side + 5] = 50.0;
+        weights[7 * side] = 0.0;
+        let grid = Grid2::new(side, &weights);
+        let total: f32 = weights.iter().sum();
+        let mut rng = Pcg32::seed_from_u64(1);
+        let n = 200_000;
+        let mut hits = vec![0u32; side * side];
+        let mut inv_pdf_sum = 0.0f64;
+        for _ in 0..n {
+            let (u, pdf) = grid.sample([rng.gen(), rng.gen()]);
+            let cell = Grid2::cell_of(side, u);
+            hits[cell] += 1;
+            let expected = weights[cell] / total * (side * side) as f32;
+            assert!((pdf - expected).abs() < 1e-4 * expected.max(1.0), "{pdf} vs {expected}");
+            inv_pdf_sum += 1.0 / pdf as f64;
+        }
+        assert_eq!(hits[7 * side], 0, "a zero-weight cell was sampled");
+        let share = hits[3 * side + 5] as f32 / n as f32;
+        assert!((share - 50.0 / total).abs() < 0.01, "{share}");
+        // E[1/pdf] = 1 over the support: the reweighting that keeps estimates unbiased.
+        let support = (side * side - 1) as f64 / (side * side) as f64;
+        assert!((inv_pdf_sum / n as f64 - support).abs() < 0.01, "{}", inv_pdf_sum / n as f64);
+    }
+
+    #[test]
+    fn learning_concentrates_on_seen_samples_and_keeps_a_uniform_share() {
+        let samples: Vec<([f32; 2], f32)> = (0..4096)
+            .map(|i| ([(i % 64) as f32 / 64.0, (i / 64) as f32 / 64.0], f32::from(u8::from(i % 64 < 4))))
+            .collect();
+        let pilot = vec![EmitterPilot { emitted: 4096, stored: 4096, seen: 256, samples }];
+        let guide = EmissionGuide::learn(&pilot, &[Guided::Direction]).unwrap();
+        let (_, grid) = guide.grids[0].as_ref().unwrap();
+        let mut rng = Pcg32::seed_from_u64(2);
+        let n = 20_000;
+        let low = (0..n).filter(|_| grid.sample([rng.gen(), rng.gen()]).0[0] < 0.1).count();
+        // Seen samples have u[0] < 4/64: the fine level (filled one cell around), and the middle
+        // level's first row of 8 × 8 blocks (u[0] < 1/4) keeps half of its share there.
+        assert!(low as f64 / n as f64 > 0.45, "{low}");
+        // Far from them: the uniform share and the coarsest level (the whole 32 × 32 grid).
+        let (_, pdf) = grid.sample([0.99, 0.5]);
+        assert!((pdf - DEFENSIVE - LEVELS[2].1).abs() < 1e-3, "{pdf}");
+        assert!(EmissionGuide::learn(
+            &[EmitterPilot { emitted: 10, stored: 0, seen: 0, samples: vec![] }],
+            &[Guided::Position]
+        )
+        .is_none());
+    }
+}
