@@ -24,13 +24,16 @@ if ! "$VENV/bin/python" -c "import mitsuba, numpy, sys; sys.exit(mitsuba.__versi
 fi
 
 "$VENV/bin/python" - <<'PY'
+import drjit as dr
 import mitsuba as mi
-print("mitsuba", mi.__version__, "variants:", ", ".join(mi.variants()))
+print("mitsuba", mi.__version__)
 for v in ("llvm_ad_rgb", "scalar_rgb"):
     try:
         mi.set_variant(v)
+        x = mi.Float(1.0) + 1.0  # llvm_ad_rgb compiles this with libLLVM: fails if it is missing
+        dr.eval(x)
         print("usable variant:", v)
         break
-    except Exception as e:  # llvm_ad_rgb needs libLLVM on the library path
+    except Exception as e:
         print("variant", v, "unavailable:", e)
 PY
