@@ -1,0 +1,423 @@
+#!/usr/bin/env python3
+"""Independent reference images of our scenes, rendered with Mitsuba 3's path tracer.
+
+    /work/mitsuba-venv/bin/python scripts/mitsuba_reference.py SCENE.toml OUTDIR
+        (--minutes M | --spp N) [--threads T] [--variant llvm_ad_rgb] [--batch-spp B]
+        [--small-dir tests/data/refs] [--compare OURS.exr] [--seed S]
+
+Reads OUR scene file (TOML + OBJ + MTL, scenes/SCENES.md conventions) and builds the Mitsuba
+scene itself: the OBJ is parsed here (Mitsuba's OBJ loader ignores `usemtl`), faces are grouped
+by material and each group becomes one `mi.Mesh` without vertex normals (flat shading: Mitsuba
+then shades with the face normal n = (v1 - v0) x (v2 - v0), as we do). Mapping (exact, or refused):
+
+    diffuse   -> twosided(diffuse kd)
+    mirror    -> conductor, material "none", specular_reflectance ks (1: reflectance exactly 1)
+    glass     -> dielectric, int_ior = ior, ext_ior = 1.0
+    emissive  -> area emitter, radiance ke (front side only) + twosided(diffuse kd)
+    point     -> point, intensity (W/sr)
+    distant   -> directional, direction = the way the light travels (as ours), irradiance (W/m^2)
+    camera    -> perspective, fov_axis y, look_at, hdrfilm rgb float32, box rfilter
+    glossy, spot, anything else -> error (no approximation)
+
+Transport: `path`, max_depth -1, rr_depth 5, hide_emitters false, independent sampler.
+
+Renders independent batches (seeds seed, seed+1, ...) of B samples per pixel each, averages
+them, and estimates the noise left in the mean from the batch-to-batch variance:
+noise RMSE = sqrt(mean over pixels and channels of var_batches / n_batches). With --minutes
+the batches go on while the next one is expected to end within the budget (B is picked from
+two short timing renders so that the budget holds about 32 batches, or given with --batch-spp).
+
+Writes OUTDIR/<name>.exr (float32 RGB, row 0 at the top), OUTDIR/<name>.png (sRGB preview,
+clamped at 1), OUTDIR/<name>.txt (version, variant, spp, batches, time, noise, means) and, with
+--small-dir, <small-dir>/<name>-64.exr: the image box-downsampled to 64x64 (each pixel the mean
+of a 4x4 block). --compare OURS.exr prints the mean of OURS against the reference's, per channel.
+"""
+
+import argparse
+import datetime
+import hashlib
+import math
+import os
+import platform
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+
+class Refused(Exception):
+    """Something in the scene that Mitsuba cannot be given exactly."""
+
+
+# ---------------------------------------------------------------------------------------------
+# Our scene file, read the way src/scene/ reads it
+
+
+def parse_mtl(path):
+    """{name: {kd, ks, ke, ns, ni, illum}} (fields absent from the file are absent)."""
+    mats, cur = {}, None
+    for lineno, raw in enumerate(path.read_text().splitlines(), 1):
+        w = raw.split("#", 1)[0].split()
+        if not w:
+            continue
+        key = w[0]
+        if key == "newmtl":
+            cur = mats.setdefault(" ".join(w[1:]), {})
+        elif cur is None:
+            continue
+        elif key in ("Kd", "Ks", "Ke"):
+            cur[key.lower()] = [float(x) for x in w[1:4]]
+        elif key == "Ns":
+            cur["ns"] = float(w[1])
+        elif key == "Ni":
+            cur["ni"] = float(w[1])
+        elif key == "illum":
+            cur["illum"] = int(w[1])
+    return mats
+
+
+def parse_obj(path):
+    """Vertices (n x 3 float64), triangles (m x 3, 0-based, fans), and per triangle its
+    material name (None without `usemtl`), plus the materials of its `mtllib`s."""
+    verts, tris, tri_mat, mtl = [], [], [], {}
+    material = None
+    for lineno, raw in enumerate(path.read_text().splitlines(), 1):
+        w = raw.split()
+        if not w or w[0].startswith("#"):
+            continue
+        key = w[0]
+        if key == "v":
+            if len(w) not in (4, 5, 7):
+                raise Refused(f"{path}:{lineno}: vertex with {len(w) - 1} numbers")
+            if len(w) == 5 and float(w[4]) != 1.0:
+                raise Refused(f"{path}:{lineno}: vertex with w != 1")
+            verts.append([float(x) for x in w[1:4]])
+        elif key == "f":
+            idx = []
+            for ref in w[1:]:
+                i = int(ref.split("/")[0])
+                idx.append(i - 1 if i > 0 else len(verts) + i)
+            if len(idx) < 3 or not all(0 <= i < len(verts) for i in idx):
+                raise Refused(f"{path}:{lineno}: bad face")
+            for k in range(1, len(idx) - 1):  # fan, as tobj triangulates: (0,1,2),(0,2,3),...
+                tris.append((idx[0], idx[k], idx[k + 1]))
+                tri_mat.append(material)
+        elif key == "usemtl":
+            material = raw.split(None, 1)[1].strip()
+        elif key == "mtllib":
+            for name in raw.split(None, 1)[1].split():
+                for k, v in parse_mtl(path.parent / name).items():
+                    mtl.setdefault(k, v)
+        elif key in ("vn", "vt"):
+            pass  # ignored: we shade flat, as the renderer does
+        elif key in ("o", "g", "s"):
+            pass
+        elif key == "l":
+            pass  # polylines are not rendered
+        else:
+            raise Refused(f"{path}:{lineno}: unknown OBJ statement {key!r}")
+    return np.array(verts, dtype=np.float64).reshape(-1, 3), np.array(tris, dtype=np.int64).reshape(-1, 3), tri_mat, mtl
+
+
+def mtl_kind(m):
+    """src/scene/mod.rs mtl_kind: Ke -> emissive; illum 3/5 mirror; 4/6/7 glass; 2 with Ks, Ns glossy."""
+    if any(x > 0 for x in m.get("ke", [0, 0, 0])):
+        return "emissive"
+    illum = m.get("illum")
+    if illum in (3, 5):
+        return "mirror"
+    if illum in (4, 6, 7):
+        return "glass"
+    if illum == 2 and any(x > 0 for x in m.get("ks", [0, 0, 0])) and "ns" in m:
+        return "glossy"
+    return "diffuse"
+
+
+def resolve_material(name, mtl, entry):
+    """src/scene/mod.rs material(): the scene file's [materials.NAME] wins field by field."""
+    if name is None:
+        return {"type": "diffuse", "kd": [0.8, 0.8, 0.8]}
+    if mtl is None and entry is None:
+        raise Refused(f"material {name}: defined neither in the MTL nor in the scene file")
+    mtl, entry = mtl or {}, entry or {}
+    pick = lambda f, default: entry.get(f, mtl.get(f, default))  # noqa: E731
+    kind = entry.get("type") or mtl_kind(mtl)
+    m = {"type": kind}
+    if kind in ("diffuse", "emissive", "glossy"):
+        m["kd"] = pick("kd", [0.0, 0.0, 0.0])
+    if kind == "emissive":
+        m["ke"] = pick("ke", [0.0, 0.0, 0.0])
+    if kind == "mirror":
+        m["ks"] = pick("ks", [1.0, 1.0, 1.0])
+    if kind == "glass":
+        m["ior"] = entry.get("ior", mtl.get("ni", 1.5))
+    if kind == "glossy":
+        raise Refused(f"material {name}: glossy (normalised Phong) has no exact Mitsuba 3 counterpart")
+    if kind not in ("diffuse", "emissive", "mirror", "glass"):
+        raise Refused(f"material {name}: unknown type {kind!r}")
+    return m
+
+
+def load_scene(toml_path):
+    """Camera, {material name: (material, vertices, triangles)}, lights, as our loader sees them."""
+    toml_path = Path(toml_path)
+    scene = tomllib.loads(toml_path.read_text())
+    unknown = set(scene) - {"camera", "mesh", "materials", "light", "render"}
+    if unknown:
+        raise Refused(f"{toml_path}: unknown tables {sorted(unknown)}")
+    entries = scene.get("materials", {})
+    groups, mtl_all = {}, {}
+    for i, mesh in enumerate(scene.get("mesh", [])):
+        unknown = set(mesh) - {"obj", "material", "scale", "translate"}
+        if unknown:
+            raise Refused(f"mesh[{i}]: unknown keys {sorted(unknown)}")
+        verts, tris, tri_mat, mtl = parse_obj(toml_path.parent / mesh["obj"])
+        scale = mesh.get("scale", 1.0)
+        scale = np.array([scale] * 3 if isinstance(scale, (int, float)) else scale, dtype=np.float64)
+        verts = verts * scale + np.array(mesh.get("translate", [0.0, 0.0, 0.0]), dtype=np.float64)
+        if np.prod(scale) < 0:  # a mirroring scale flips the winding; the renderer restores it
+            tris = tris[:, [0, 2, 1]]
+        if "material" in mesh:
+            tri_mat = [mesh["material"]] * len(tris)
+        for k, v in mtl.items():
+            mtl_all.setdefault(k, v)
+        names = np.array([m if m is not None else "\0default" for m in tri_mat], dtype=object)
+        for name in dict.fromkeys(names):
+            sel = tris[names == name]
+            used = np.unique(sel)
+            remap = np.full(len(verts), -1, dtype=np.int64)
+            remap[used] = np.arange(len(used))
+            groups.setdefault(name, []).append((verts[used], remap[sel]))
+    out = {}
+    for name, pieces in groups.items():
+        real = None if name == "\0default" else name
+        material = resolve_material(real, mtl_all.get(real), entries.get(real))
+        vs, ts, base = [], [], 0
+        for v, t in pieces:
+            vs.append(v)
+            ts.append(t + base)
+            base += len(v)
+        out[real or "(default grey)"] = (material, np.concatenate(vs), np.concatenate(ts))
+    lights = scene.get("light", [])
+    for light in lights:
+        if light.get("type") not in ("point", "distant"):
+            raise Refused(f"light type {light.get('type')!r}: only point and distant map exactly")
+    return scene["camera"], out, lights
+
+
+# ---------------------------------------------------------------------------------------------
+# The Mitsuba scene
+
+
+def rgb(v):
+    return {"type": "rgb", "value": [float(x) for x in v]}
+
+
+def bsdf_dict(m):
+    if m["type"] in ("diffuse", "emissive"):
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb(m["kd"])}}
+    if m["type"] == "mirror":
+        return {"type": "conductor", "material": "none", "specular_reflectance": rgb(m["ks"])}
+    if m["type"] == "glass":
+        return {"type": "dielectric", "int_ior": float(m["ior"]), "ext_ior": 1.0}
+    raise Refused(m["type"])
+
+
+def build(mi, camera, groups, lights, spp):
+    scene = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": -1, "rr_depth": 5, "hide_emitters": False},
+        "sensor": {
+            "type": "perspective",
+            "fov_axis": "y",
+            "fov": float(camera["vfov_deg"]),
+            "to_world": mi.ScalarTransform4f.look_at(
+                origin=[float(x) for x in camera["eye"]],
+                target=[float(x) for x in camera["target"]],
+                up=[float(x) for x in camera["up"]],
+            ),
+            "film": {
+                "type": "hdrfilm",
+                "width": int(camera["width"]),
+                "height": int(camera["height"]),
+                "rfilter": {"type": "box"},
+                "pixel_format": "rgb",
+                "component_format": "float32",
+            },
+            "sampler": {"type": "independent", "sample_count": spp},
+        },
+    }
+    for k, (name, (m, v, t)) in enumerate(groups.items()):
+        props = mi.Properties()
+        props["bsdf"] = mi.load_dict(bsdf_dict(m))
+        if m["type"] == "emissive" and max(m["ke"]) > 0:
+            props["emitter"] = mi.load_dict({"type": "area", "radiance": rgb(m["ke"])})
+        mesh = mi.Mesh(f"m{k}_{name}", len(v), len(t), props, has_vertex_normals=False,
+                       has_vertex_texcoords=False)
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = type(params["vertex_positions"])(v.astype(np.float32).ravel())
+        params["faces"] = type(params["faces"])(t.astype(np.uint32).ravel())
+        params.update()
+        scene[f"mesh{k}"] = mesh
+    for k, light in enumerate(lights):
+        if light["type"] == "point":
+            scene[f"light{k}"] = {"type": "point", "position": [float(x) for x in light["position"]],
+                                  "intensity": rgb(light["intensity"])}
+        elif light["type"] == "distant":
+            d = np.array(light["direction"], dtype=np.float64)
+            d /= np.linalg.norm(d)
+            # Mitsuba's `direction` is the way the light propagates, as ours (src/light/distant.rs).
+            scene[f"light{k}"] = {"type": "directional", "direction": [float(x) for x in d],
+                                  "irradiance": rgb(light["irradiance"])}
+    return mi.load_dict(scene)
+
+
+# ---------------------------------------------------------------------------------------------
+# Rendering in batches
+
+
+def render_batches(mi, scene, args, log):
+    def one(spp, seed):
+        t0 = time.perf_counter()
+        img = np.array(mi.render(scene, spp=spp, seed=seed), dtype=np.float64)[:, :, :3]
+        return img, time.perf_counter() - t0
+
+    budget = None if args.minutes is None else args.minutes * 60.0
+    batch_spp = args.batch_spp
+    seed = args.seed
+    start = time.perf_counter()
+    if batch_spp is None:
+        if budget is None:
+            batch_spp = 32
+        else:
+            # Two short timing renders (the first includes compiling the kernels), not kept.
+            probe = 4
+            _, t_first = one(probe, 10_000_000 + seed)
+            _, t_probe = one(probe, 10_000_001 + seed)
+            per_spp = t_probe / probe
+            left = budget - (time.perf_counter() - start)
+            batch_spp = int(max(4, min(args.max_batch_spp, left / 32 / per_spp)))
+            log(f"timing: first {probe}-spp render {t_first:.2f} s, second {t_probe:.2f} s "
+                f"-> {batch_spp} spp a batch")
+    n_target = None if args.spp is None else max(2, math.ceil(args.spp / batch_spp))
+    total = None
+    sq = None
+    times = []
+    n = 0
+    while True:
+        if n_target is not None and n >= n_target:
+            break
+        if budget is not None and n >= 2:
+            elapsed = time.perf_counter() - start
+            if elapsed + np.mean(times[1:] or times) > budget:
+                break
+        img, dt = one(batch_spp, seed + n)
+        if not np.all(np.isfinite(img)):
+            bad = int(np.sum(~np.isfinite(img)))
+            raise RuntimeError(f"batch {n}: {bad} non-finite values")
+        total = img if total is None else total + img
+        sq = img * img if sq is None else sq + img * img
+        times.append(dt)
+        n += 1
+        if n == 1 or n % 8 == 0:
+            log(f"batch {n}: {dt:.2f} s, running mean {total.mean() / n:.5f}")
+    mean = total / n
+    var = np.maximum(sq / n - mean * mean, 0.0) * n / (n - 1)  # unbiased, batch to batch
+    noise = math.sqrt(var.mean() / n)
+    return mean.astype(np.float32), noise, n, batch_spp, time.perf_counter() - start
+
+
+def write_exr(mi, path, img):
+    mi.Bitmap(np.ascontiguousarray(img, dtype=np.float32), mi.Bitmap.PixelFormat.RGB).write(str(path))
+
+
+def write_png(mi, path, img):
+    b = mi.Bitmap(np.ascontiguousarray(np.clip(img, 0.0, 1.0), dtype=np.float32), mi.Bitmap.PixelFormat.RGB)
+    b.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True).write(str(path))
+
+
+def downsample(img, factor):
+    h, w, c = img.shape
+    return img.reshape(h // factor, factor, w // factor, factor, c).astype(np.float64).mean(axis=(1, 3))
+
+
+def read_exr(mi, path):
+    return np.array(mi.Bitmap(str(path)), dtype=np.float64)[:, :, :3]
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scene", type=Path, help="our scene file (TOML)")
+    ap.add_argument("outdir", type=Path, help="where <name>.exr, .png and .txt go")
+    budget = ap.add_mutually_exclusive_group(required=True)
+    budget.add_argument("--minutes", type=float, help="wall-time budget")
+    budget.add_argument("--spp", type=int, help="total samples per pixel")
+    ap.add_argument("--threads", type=int, default=2, help="Dr.Jit worker threads (default 2)")
+    ap.add_argument("--variant", default="llvm_ad_rgb", help="Mitsuba variant (llvm_ad_rgb or scalar_rgb)")
+    ap.add_argument("--batch-spp", type=int, help="samples per pixel in each batch (default: from timing)")
+    ap.add_argument("--max-batch-spp", type=int, default=128, help="cap on the automatic batch size (memory)")
+    ap.add_argument("--seed", type=int, default=0, help="seed of the first batch (the others follow)")
+    ap.add_argument("--name", help="output name (default: the scene file's stem)")
+    ap.add_argument("--small-dir", type=Path, help="also write <small-dir>/<name>-64.exr (4x4 box-downsampled)")
+    ap.add_argument("--compare", type=Path, help="print the mean of this EXR (ours) against the reference's")
+    args = ap.parse_args()
+    name = args.name or args.scene.stem
+
+    def log(msg):
+        print(f"[{name}] {msg}", file=sys.stderr, flush=True)
+
+    import drjit as dr
+    import mitsuba as mi
+
+    mi.set_variant(args.variant)
+    if args.variant.startswith("llvm"):
+        dr.set_thread_count(args.threads)
+    try:
+        camera, groups, lights = load_scene(args.scene)
+    except Refused as e:
+        sys.exit(f"{args.scene}: refused: {e}")
+    for mname, (m, v, t) in groups.items():
+        log(f"material {mname}: {m['type']}, {len(t)} triangles")
+    t0 = time.perf_counter()
+    scene = build(mi, camera, groups, lights, 4)
+    log(f"scene built in {time.perf_counter() - t0:.2f} s; rendering ({args.variant}, {args.threads} threads)")
+    img, noise, n, batch_spp, wall = render_batches(mi, scene, args, log)
+    h, w = img.shape[:2]
+    means = img.reshape(-1, 3).mean(axis=0)
+
+    args.outdir.mkdir(parents=True, exist_ok=True)
+    write_exr(mi, args.outdir / f"{name}.exr", img)
+    write_png(mi, args.outdir / f"{name}.png", img)
+    if args.small_dir is not None:
+        if h % 4 or w % 4:
+            sys.exit(f"{w}x{h} is not divisible by 4")
+        args.small_dir.mkdir(parents=True, exist_ok=True)
+        write_exr(mi, args.small_dir / f"{name}-64.exr", downsample(img, 4).astype(np.float32))
+    digest = hashlib.sha256()
+    digest.update(args.scene.read_bytes())
+    report = [
+        f"reference: {name} ({args.scene}, sha256 of the TOML {digest.hexdigest()[:16]})",
+        f"renderer: Mitsuba {mi.__version__}, variant {args.variant}, integrator path (max_depth -1, "
+        "rr_depth 5, hide_emitters false), independent sampler, box filter",
+        f"size: {w}x{h}",
+        f"spp: {n * batch_spp} total = {n} batches x {batch_spp} spp (seeds {args.seed}..{args.seed + n - 1})",
+        f"wall time: {wall:.1f} s on {args.threads} threads ({platform.node()}, {os.cpu_count()} cores)",
+        f"noise RMSE (estimated from batch-to-batch variance): {noise:.6f}",
+        f"mean: R {means[0]:.6f} G {means[1]:.6f} B {means[2]:.6f} (all {means.mean():.6f})",
+        f"date: {datetime.datetime.now(datetime.timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}",
+        "command: " + " ".join([Path(sys.executable).as_posix(), *sys.argv]),
+    ]
+    (args.outdir / f"{name}.txt").write_text("\n".join(report) + "\n")
+    print("\n".join(report))
+    if args.compare is not None:
+        ours = read_exr(mi, args.compare).reshape(-1, 3).mean(axis=0)
+        rel = ours / means - 1.0
+        print(f"compare: ours {args.compare} mean R {ours[0]:.6f} G {ours[1]:.6f} B {ours[2]:.6f}; "
+              f"ours/reference - 1: R {rel[0]:+.2%} G {rel[1]:+.2%} B {rel[2]:+.2%} "
+              f"(all {ours.mean() / means.mean() - 1:+.2%})")
+
+
+if __name__ == "__main__":
+    main()
