@@ -79,7 +79,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                         return l;
                     };
                     let r2 = r2 * scale;
-                    let (phi, _) = flux_within(&maps, gathers, &v, ns, r2.sqrt(), c);
+                    let (phi, _) = flux_within(&maps, gathers, &v, ns, r2, c);
                     let photons = phi / (std::f32::consts::PI * r2);
                     if photons.is_finite() {
                         l += photons;

@@ -212,7 +212,7 @@ fn gather(
             None => return,
         }
     }
-    let (phi, m) = flux_within(maps, gathers, v, ns, st.r2.sqrt(), c);
+    let (phi, m) = flux_within(maps, gathers, v, ns, st.r2, c);
     if m == 0 {
         return;
     }
@@ -250,21 +250,25 @@ pub(super) fn first_radius2(
     (r2.is_finite() && r2 > 0.0).then_some(r2)
 }
 
-/// The flux `β Σ f(wo, wi) power` of the photons of every map within `r` of the visible point
-/// `v` (a disc flattened along `ns`), and how many there were.
+/// The flux `β Σ f(wo, wi) power` of the photons of every map strictly inside the squared
+/// radius `r2` of the visible point `v` (a disc flattened along `ns`), and how many there were.
+/// Strictly: when `r2` is the distance to the `k`-th nearest photon of this pass's maps (the
+/// first radius), that photon is on the disc's edge and the `k - 1` inside are what its area
+/// measures; counting it too made the first pass `k / (k - 1)` too bright (+3.4 % at k = 30).
 pub(super) fn flux_within(
     maps: &PhotonMaps,
     gathers: &GatherPair,
     v: &Landing<'_>,
     ns: Vec3,
-    r: f32,
+    r2: f32,
     c: &mut Counters,
 ) -> (Vec3, u32) {
     let mut phi = Vec3::ZERO;
     let mut m = 0u32;
     for map in maps.indirect.iter().chain(&maps.caustic) {
-        m += map.for_each_within(v.hit.p, ns, r, gathers.indirect.flatten, |wi, power| {
+        m += map.for_each_inside(v.hit.p, ns, r2, gathers.indirect.flatten, |_, wi, power| {
             phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+            true
         });
     }
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
