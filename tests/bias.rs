@@ -74,11 +74,18 @@ fn first_pass_leaves_out_the_kth_photon() {
 /// A closed box `[-1, 1]³` parted at `x = 0` by a wall of zero thickness (one quad, emitting
 /// from its `+x` face only, two-sided diffuse): the `+x` half is a furnace (2 everywhere), the
 /// `-x` half has walls of albedo 0.5 that emit nothing and no light can reach it (exactly 0).
-/// The camera stands in the dark half, looking at the wall's foot on the floor.
-fn parted_box() -> Scene {
+/// The camera stands in the dark half, looking at the wall's foot on the floor. With `glossy`
+/// the parting wall is a two-sided glossy quad instead (the lit half is then no furnace, the
+/// dark half still exactly 0).
+fn parted_box(glossy: bool) -> Scene {
     let mut b = Builder::default();
     let lit = furnace_material(&mut b);
     let dark = b.material("dark", Material::Diffuse { kd: Vec3::splat(0.5) });
+    let wall = if glossy {
+        b.material("glossy", Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.5), ns: 20.0 })
+    } else {
+        lit
+    };
     for (material, x0, x1) in [(lit, 0.0, 1.0), (dark, -1.0, 0.0)] {
         let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
         // Floor, ceiling, front, back and the outer end of this half, facing inward.
@@ -94,7 +101,7 @@ fn parted_box() -> Scene {
         );
     }
     let p = |y: f32, z: f32| Vec3::new(0.0, y, z);
-    b.quad([p(-1.0, -1.0), p(1.0, -1.0), p(1.0, 1.0), p(-1.0, 1.0)], Vec3::X, lit);
+    b.quad([p(-1.0, -1.0), p(1.0, -1.0), p(1.0, 1.0), p(-1.0, 1.0)], Vec3::X, wall);
     let cam = camera(Vec3::new(-0.6, 0.0, 0.0), Vec3::new(0.0, -0.8, 0.3), Vec3::Y, 60.0);
     b.build("parted-box", cam)
 }
@@ -137,14 +144,16 @@ fn edges_and_corners_are_not_dark() {
 /// 20k photons: before the footprint probes the dark half's mean was 0.012 (it is exactly 0);
 /// after, 0 to five decimals. The wall's own dark face is the back-side test's (the wall has
 /// zero thickness: the lit face's photons lie exactly on it and are turned away by their
-/// direction), and was already 0.
+/// direction), and was already 0, diffuse or glossy.
 #[test]
 fn no_light_leaks_under_a_thin_wall() {
-    let scene = parted_box();
-    for kind in [IntegratorKind::Sppm, IntegratorKind::Pppm] {
-        let mean = mean_of(&scene, &progressive(kind, 16, 20_000, 1), 32, 1);
-        eprintln!("{kind:?}: dark half: mean {mean:.5} (exact 0)");
-        assert!(mean < 2e-4, "{kind:?}: mean {mean} in the dark half, exact 0");
+    for glossy in [false, true] {
+        let scene = parted_box(glossy);
+        for kind in [IntegratorKind::Sppm, IntegratorKind::Pppm] {
+            let mean = mean_of(&scene, &progressive(kind, 16, 20_000, 1), 32, 1);
+            eprintln!("{kind:?}, glossy wall {glossy}: dark half: mean {mean:.5} (exact 0)");
+            assert!(mean < 2e-4, "{kind:?}, glossy wall {glossy}: mean {mean} in the dark half, exact 0");
+        }
     }
 }
 
