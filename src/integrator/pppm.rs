@@ -18,7 +18,7 @@
 
 use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassRenderer};
-use super::sppm::{camera_samples, first_radius2, flux_within, pass_maps, visible_point, Scratch};
+use super::sppm::{camera_samples, first_radius2, flux_within, pass_maps, visible_point, Footprint, Scratch};
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
 use crate::film::Film;
@@ -79,7 +79,8 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                         return l;
                     };
                     let r2 = r2 * scale;
-                    let (phi, _) = flux_within(&maps, gathers, &v, ns, r2.sqrt(), c);
+                    let footprint = Footprint::probe(frame, &v.hit, ns, r2, rng, c);
+                    let (phi, _) = flux_within(&maps, gathers, &v, ns, &footprint, c);
                     let photons = phi / (std::f32::consts::PI * r2);
                     if photons.is_finite() {
                         l += photons;

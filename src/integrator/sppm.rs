@@ -16,10 +16,21 @@
 //! ```
 //!
 //! After `n` passes the pixel is `Ld / n + τ / (n π R²)` (each photon's power is already its
-//! pass's flux over the photons emitted in that pass). `R` starts at the distance to the
-//! `k`-th nearest photon of the first visible point (`--gather-photons`, in the map where photons
-//! are densest, so caustics start small), bounded by `--gather-radius`; it then shrinks so that
-//! bias and variance both go to zero as passes are added.
+//! pass's flux over the photons emitted in that pass); since `τ' / R'² = (τ + Φ) / R²`, that is
+//! the mean over passes of each pass's own estimate `Φ / (π R²)` at the radius the passes
+//! before it left, which does not depend on the pass's photons (but for the first pass, whose
+//! disc is drawn through its own `k`-th photon and so leaves that photon out).
+//!
+//! Only the photons over the disc's footprint (`Footprint`) count, the part of the disc that
+//! the visible point's surface fills (found by a few probe rays: walls standing on the surface
+//! and edges where it ends cut it back), and `Φ` is scaled by the disc's area over the
+//! footprint's. The whole disc made every edge and corner too dark and let light in under
+//! thin walls: a bias proportional to `R`, which shrinks only as `n^((α - 1) / 2)`.
+//!
+//! `R` starts at the distance to the `k`-th nearest photon of the first visible point
+//! (`--gather-photons`, in the map where photons are densest, so caustics start small), bounded
+//! by `--gather-radius`; it then shrinks so that bias and variance both go to zero as passes are
+//! added.
 
 use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassRenderer};
@@ -29,13 +40,15 @@ use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
+use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Progress};
-use crate::geometry::Ray;
+use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::face_forward;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use crate::stats::Stats;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
+use rand::Rng;
 use rand_pcg::Pcg32;
 
 /// A pixel's progressive statistics (the emission and direct light, averaged over passes like
@@ -87,7 +100,7 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                 |x, y, st, rng, scratch: &mut Scratch, c| {
                     let l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     if let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) {
-                        gather(&maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, c);
+                        gather(frame, &maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, rng, c);
                     }
                     l
                 },
@@ -192,14 +205,19 @@ pub(super) fn visible_point<'s, A: Accel>(
     walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _, _, _| {})
 }
 
-/// The photons of this pass around the visible point: the progressive update of `st`.
-fn gather(
+/// The photons of this pass around the visible point: the progressive update of `st`. The
+/// flux and count are those of the disc's [`Footprint`], scaled to the whole disc (over the
+/// footprint's share of it), so that `τ / (π R²)` stays the estimate and `M` a density.
+#[allow(clippy::too_many_arguments)]
+fn gather<A: Accel>(
+    frame: &Frame<'_, A>,
     maps: &PhotonMaps,
     gathers: &GatherPair,
     st: &mut PixelState,
     v: &Landing<'_>,
     alpha: f32,
     nb: &mut Vec<Neighbor>,
+    rng: &mut Pcg32,
     c: &mut Counters,
 ) {
     if maps.indirect.is_empty() && maps.caustic.is_empty() {
@@ -212,7 +230,8 @@ fn gather(
             None => return,
         }
     }
-    let (phi, m) = flux_within(maps, gathers, v, ns, st.r2.sqrt(), c);
+    let footprint = Footprint::probe(frame, &v.hit, ns, st.r2, rng, c);
+    let (phi, m) = flux_within(maps, gathers, v, ns, &footprint, c);
     if m == 0 {
         return;
     }
@@ -220,7 +239,7 @@ fn gather(
         c.nonfinite += 1;
         return;
     }
-    let (n, m) = (st.n, m as f32);
+    let (n, m) = (st.n, m as f32 / footprint.share);
     let n_new = n + alpha * m;
     let ratio = n_new / (n + m);
     st.tau = (st.tau + phi) * ratio;
@@ -250,23 +269,290 @@ pub(super) fn first_radius2(
     (r2.is_finite() && r2 > 0.0).then_some(r2)
 }
 
-/// The flux `β Σ f(wo, wi) power` of the photons of every map within `r` of the visible point
-/// `v` (a disc flattened along `ns`), and how many there were.
+/// The flux `β Σ f(wo, wi) power` of the photons of every map over the `footprint` of the
+/// visible point `v` (within its disc, flattened along `ns`), scaled to the disc the footprint
+/// was asked for (divided by its `share`: `flux / (π r²)` is the estimate over the footprint's
+/// area, `r²` the squared radius asked for), and how many photons there were.
+///
+/// Strictly inside the disc: when its squared radius is the distance to the `k`-th nearest
+/// photon of this pass's maps (the first radius), that photon is on the disc's edge and the
+/// `k - 1` inside are what its area measures; counting it too made the first pass `k / (k - 1)`
+/// too bright (+3.4 % at k = 30).
 pub(super) fn flux_within(
     maps: &PhotonMaps,
     gathers: &GatherPair,
     v: &Landing<'_>,
     ns: Vec3,
-    r: f32,
+    footprint: &Footprint,
     c: &mut Counters,
 ) -> (Vec3, u32) {
     let mut phi = Vec3::ZERO;
     let mut m = 0u32;
     for map in maps.indirect.iter().chain(&maps.caustic) {
-        m += map.for_each_within(v.hit.p, ns, r, gathers.indirect.flatten, |wi, power| {
-            phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+        m += map.for_each_inside(v.hit.p, ns, footprint.r2, gathers.indirect.flatten, |offset, wi, power| {
+            let inside = footprint.contains(offset);
+            if inside {
+                phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+            }
+            inside
         });
     }
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
-    (v.beta * phi, m)
+    if m == 0 {
+        // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
+        return (Vec3::ZERO, 0);
+    }
+    (v.beta * phi / footprint.share, m)
+}
+
+/// Directions in which a visible point probes its surface, evenly spaced around it.
+pub(super) const PROBES: usize = 6;
+
+/// The part of a gather disc that the visible point's own surface fills, as far as rays cast
+/// down onto the surface can tell: the disc cut back by the walls standing on the surface and
+/// by the edges where it ends.
+///
+/// Where a wall stands on the surface within the gather radius (a room's corners and edges, a
+/// block on the floor, a thin wall standing on it), or the surface ends (a block's top, a
+/// slab's edge), the disc reaches past it: its part beyond holds no photons of this surface, so
+/// photons over `π r²` made every edge too dark (by a missing strip about 0.15 r wide with the
+/// flattened disc), and it may hold photons of the surface on a thin wall's far side (light
+/// leaked under the wall).
+///
+/// In each of `PROBES` evenly spaced directions, turned by a random angle, a ray from a point
+/// `r / √8` above the visible point (the flattened disc's half thickness) is aimed at the
+/// surface where the disc's rim should be, and goes on to as deep below it. It meets a wall (a
+/// surface at more than 60° to this one) at or before the rim: the footprint ends at the
+/// wall's foot (pulled back by `r / 1000`, so that the wall's own photons, over its foot, stay
+/// out). It meets a surface (within 60°) there: the surface reaches the rim in that direction.
+/// It meets nothing, or a wall beyond the rim: the surface ends before the rim, and the aim is
+/// halved (then moved a quarter back out if that finds it), two more rays at most. The
+/// footprint is the disc within the polygon of the probes' end points; photons count only
+/// over it and the estimate divides by its area (`share` of the disc's). Every end point lies
+/// on the surface, so on a surface bounded by straight walls and convex edges the polygon
+/// stays on it, whatever the number of probes, and the photons counted and the area agree
+/// exactly; what it does not see are walls and edges between two probes that miss them.
+pub(super) struct Footprint {
+    /// Tangent frame: the polygon's coordinates are along these.
+    t: [Vec3; 2],
+    /// The angle of the first probe.
+    theta0: f32,
+    /// The probes' end points, counter-clockwise, in the tangent frame.
+    ends: [Vec2; PROBES],
+    /// Whether some probe ended inside the rim (otherwise the footprint is the whole disc).
+    cut: bool,
+    /// The squared radius of the disc the footprint is cut from: the one asked for, or a
+    /// sixteenth or a 256th of it where little of the larger disc lies on the surface.
+    pub r2: f32,
+    /// The footprint's area over the area `π r²` of the disc asked for, in `[0, 1]`.
+    pub share: f32,
+}
+
+/// What a probe found along one direction.
+enum Reach {
+    /// The surface reaches this far (as aimed).
+    Surface,
+    /// A wall stands on the surface at this distance.
+    Wall(f32),
+    /// The surface ends before the aim.
+    Edge,
+}
+
+impl Footprint {
+    /// The whole disc of squared radius `r2`.
+    pub fn whole(r2: f32) -> Self {
+        Footprint {
+            t: [Vec3::X, Vec3::Y],
+            theta0: 0.0,
+            ends: [Vec2::ZERO; PROBES],
+            cut: false,
+            r2,
+            share: 1.0,
+        }
+    }
+
+    /// Probes the surface of `hit` (unit normal `ns` on the viewer's side) within the squared
+    /// radius `r2`. Where less than a quarter of the disc lies on the surface (a strip narrower
+    /// than the disc, such as the side of a thin slab), the footprint is cut from a disc of a
+    /// quarter of the radius instead, and again if need be: an estimate over a small footprint
+    /// is noisy, but skipping it would leave such surfaces dark.
+    pub fn probe<A: Accel>(
+        frame: &Frame<'_, A>,
+        hit: &SurfaceHit,
+        ns: Vec3,
+        r2: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> Self {
+        let mut fp = Footprint::cut_from(frame, hit, ns, r2, rng, c);
+        for shrink in [16.0, 256.0] {
+            if fp.share >= 0.25 {
+                break;
+            }
+            let small = Footprint::cut_from(frame, hit, ns, r2 / shrink, rng, c);
+            fp = Footprint { share: small.share / shrink, ..small };
+        }
+        fp
+    }
+
+    /// The footprint within the disc of squared radius `r2`.
+    fn cut_from<A: Accel>(
+        frame: &Frame<'_, A>,
+        hit: &SurfaceHit,
+        ns: Vec3,
+        r2: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> Self {
+        let r = r2.sqrt();
+        let step = std::f32::consts::TAU / PROBES as f32;
+        // The polygon of probes that reach the rim circumscribes the disc.
+        let far = r / (0.5 * step).cos();
+        let lift = r * std::f32::consts::FRAC_1_SQRT_2 * 0.5;
+        let (t1, t2) = ns.any_orthonormal_pair();
+        let theta0 = rng.gen::<f32>() * step;
+        let origin = offset_ray_origin(hit.p, hit.err, ns) + lift * ns;
+        let mut probe = |t: Vec3, aim: f32| {
+            c.rays.gather += 1;
+            // At parameter 1 the ray reaches the surface's plane at `aim`, at 2 as far below.
+            let ray = Ray::segment(origin, aim * t - lift * ns, 0.0, 2.0);
+            match frame.trace(&ray) {
+                None => Reach::Edge,
+                Some(h) => {
+                    let along = (h.p - hit.p).dot(t);
+                    if h.n.dot(ns).abs() >= 0.5 {
+                        Reach::Surface
+                    } else if along <= aim {
+                        Reach::Wall(along)
+                    } else {
+                        Reach::Edge
+                    }
+                }
+            }
+        };
+        let mut ends = [Vec2::ZERO; PROBES];
+        let mut cut = false;
+        for (j, end) in ends.iter_mut().enumerate() {
+            let (sin, cos) = (theta0 + step * j as f32).sin_cos();
+            let t = cos * t1 + sin * t2;
+            let reach = match probe(t, far) {
+                Reach::Surface => far,
+                Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
+                Reach::Edge => match probe(t, 0.5 * far) {
+                    Reach::Surface => match probe(t, 0.75 * far) {
+                        Reach::Surface => 0.75 * far,
+                        Reach::Wall(d) => (d - 1e-3 * r).max(0.5 * far),
+                        Reach::Edge => 0.5 * far,
+                    },
+                    Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
+                    Reach::Edge => match probe(t, 0.25 * far) {
+                        Reach::Surface => 0.25 * far,
+                        Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
+                        Reach::Edge => 0.0,
+                    },
+                },
+            };
+            cut |= reach < far;
+            *end = Vec2::new(cos, sin) * reach;
+        }
+        if !cut {
+            return Footprint::whole(r2);
+        }
+        let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
+        let share = (area / (std::f32::consts::PI * r2)).clamp(0.0, 1.0);
+        Footprint { t: [t1, t2], theta0, ends, cut, r2, share }
+    }
+
+    /// Whether a photon at `offset` from the visible point lies over the footprint (its
+    /// distance is the caller's test).
+    #[inline]
+    pub fn contains(&self, offset: Vec3) -> bool {
+        if !self.cut {
+            return true;
+        }
+        let q = Vec2::new(offset.dot(self.t[0]), offset.dot(self.t[1]));
+        let step = std::f32::consts::TAU / PROBES as f32;
+        let angle = (q.y.atan2(q.x) - self.theta0).rem_euclid(std::f32::consts::TAU);
+        let j = ((angle / step) as usize).min(PROBES - 1);
+        let (a, b) = (self.ends[j], self.ends[(j + 1) % PROBES]);
+        (b - a).perp_dot(q - a) > 0.0
+    }
+}
+
+/// The area of the disc of radius `r` about the origin within the triangle (origin, `a`, `b`),
+/// `b` counter-clockwise from `a` by less than a half turn: the triangle's part of the segment
+/// `a b` inside the disc, and circular sectors where it runs outside.
+fn wedge_area(a: Vec2, b: Vec2, r: f32) -> f32 {
+    let sector = |u: Vec2, v: Vec2| 0.5 * r * r * u.perp_dot(v).atan2(u.dot(v));
+    let d = b - a;
+    let (qa, qb, qc) = (d.dot(d), a.dot(d), a.dot(a) - r * r);
+    let disc = qb * qb - qa * qc;
+    if qa <= 0.0 || disc <= 0.0 {
+        return if qa <= 0.0 { 0.0 } else { sector(a, b) };
+    }
+    let s = disc.sqrt();
+    let t0 = ((-qb - s) / qa).clamp(0.0, 1.0);
+    let t1 = ((-qb + s) / qa).clamp(0.0, 1.0);
+    if t0 >= t1 {
+        return sector(a, b);
+    }
+    let (p0, p1) = (a + t0 * d, a + t1 * d);
+    // Outside the disc before `t0` and after `t1` (tested, not computed: the angle between a
+    // point and itself, as `-0.0` and a rounded `0.0`, would be atan2(0, -0) = π).
+    let before = if t0 > 0.0 { sector(a, p0) } else { 0.0 };
+    let after = if t1 < 1.0 { sector(p1, b) } else { 0.0 };
+    before + 0.5 * p0.perp_dot(p1) + after
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::SeedableRng;
+
+    /// The footprint's area (`share`) is the share of the disc where `contains` says yes, for
+    /// polygons of every kind (probes that reach the rim, stop at a wall, or find nothing), so
+    /// that photons counted and area divided by agree: the estimate's unbiasedness rests on it.
+    #[test]
+    fn footprint_area_matches_what_it_contains() {
+        let mut rng = Pcg32::seed_from_u64(3);
+        let r = 0.7f32;
+        let step = std::f32::consts::TAU / PROBES as f32;
+        let far = r / (0.5 * step).cos();
+        for case in 0..50 {
+            let theta0 = rng.gen::<f32>() * step;
+            let mut ends = [Vec2::ZERO; PROBES];
+            for (j, end) in ends.iter_mut().enumerate() {
+                let reach = match rng.gen_range(0..4) {
+                    0 => far,
+                    1 => 0.0,
+                    _ => rng.gen::<f32>() * far,
+                };
+                let (sin, cos) = (theta0 + step * j as f32).sin_cos();
+                *end = Vec2::new(cos, sin) * reach;
+            }
+            let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
+            let share = area / (std::f32::consts::PI * r * r);
+            let fp = Footprint { t: [Vec3::X, Vec3::Z], theta0, ends, cut: true, r2: r * r, share };
+            let n = 40_000;
+            let mut inside = 0;
+            for i in 0..n {
+                // Stratified in radius and angle over the disc.
+                let u = (i as f32 + 0.5) / n as f32;
+                let (rho, phi) = (r * u.sqrt(), rng.gen::<f32>() * std::f32::consts::TAU);
+                if fp.contains(Vec3::new(rho * phi.cos(), 0.3, rho * phi.sin())) {
+                    inside += 1;
+                }
+            }
+            let measured = inside as f32 / n as f32;
+            assert!((measured - share).abs() < 0.01, "case {case}: share {share}, contains {measured}");
+        }
+        // Every probe at the rim or beyond: the whole disc.
+        let full: f32 = (0..PROBES)
+            .map(|j| {
+                let (a, b) = (j as f32 * step, (j + 1) as f32 * step);
+                wedge_area(Vec2::new(a.cos(), a.sin()) * far, Vec2::new(b.cos(), b.sin()) * far, r)
+            })
+            .sum();
+        assert!((full / (std::f32::consts::PI * r * r) - 1.0).abs() < 1e-4, "{full}");
+    }
 }

@@ -233,6 +233,32 @@ impl PhotonMap {
         count
     }
 
+    /// Calls `f(offset, wi, power)` for every photon strictly inside the squared radius `r2` of
+    /// `x` in the region flattened along `ns` (unit) by `flatten`, arriving from the side of
+    /// `ns` (`offset` is the photon's position minus `x`); `f` says whether it counted the
+    /// photon, and the photons counted are returned. The fixed-radius query of progressive
+    /// photon mapping: strict, so that a disc drawn through a photon (the first radius, the
+    /// distance to the `k`-th nearest) leaves it out, as [`PhotonMap::radiance`] does.
+    #[inline]
+    pub fn for_each_inside(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        r2: f32,
+        flatten: f32,
+        mut f: impl FnMut(Vec3, Vec3, Vec3) -> bool,
+    ) -> u32 {
+        let mut count = 0;
+        self.tree.for_each_below_with(x, r2, flattened_metric(ns, flatten), |i, _| {
+            let p = self.tree.get(i);
+            let wi = pack::decode_dir_oct(p.dir);
+            if wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p)) {
+                count += 1;
+            }
+        });
+        count
+    }
+
     /// Squared distance (in the flattened metric) from `x` to its `k`-th nearest photon, or
     /// `max_radius²` when fewer than `k` lie within `max_radius`.
     pub fn knn_radius2(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> f32 {

@@ -197,18 +197,37 @@ impl<T: KdPoint> KdTree<T> {
 
     /// [`KdTree::for_each_within`] with a custom squared metric of `item - p`; the same
     /// requirement as for [`KdTree::knn_with`] applies (`dist2(d) ≥ d[a]²` on every axis).
+    #[inline]
     pub fn for_each_within_with<F: Fn(Vec3) -> f32, G: FnMut(u32, f32)>(
         &self,
         p: Vec3,
         radius: f32,
         dist2: F,
+        f: G,
+    ) {
+        if radius.is_nan() || radius < 0.0 {
+            return;
+        }
+        self.for_each_below_with(p, inclusive_limit(radius * radius), dist2, f)
+    }
+
+    /// Calls `f(index, dist2)` for every item whose metric `dist2(item - p)` is strictly below
+    /// `limit` (a squared radius), in unspecified order; the requirement of
+    /// [`KdTree::knn_with`] on the metric applies. The query of an estimate whose disc is drawn
+    /// through a photon found earlier (its squared distance as `limit`), which must leave that
+    /// photon out: [`KdTree::for_each_within_with`] at `√limit` would count it whenever the
+    /// square root and its square round back to `limit` or above.
+    pub fn for_each_below_with<F: Fn(Vec3) -> f32, G: FnMut(u32, f32)>(
+        &self,
+        p: Vec3,
+        limit: f32,
+        dist2: F,
         mut f: G,
     ) {
-        if self.items.is_empty() || radius.is_nan() || radius < 0.0 {
+        if self.items.is_empty() || limit.is_nan() || limit <= 0.0 {
             return;
         }
         let items = &self.items[..];
-        let limit = inclusive_limit(radius * radius);
         let mut stack = [(0u32, 0u32, 0u32); STACK_SIZE];
         let mut sp = 0usize;
         let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
@@ -290,5 +309,27 @@ mod tests {
         assert_eq!(out.len(), 2);
         t.within_radius(Vec3::ZERO, 0.999, &mut out);
         assert_eq!(out.len(), 1);
+    }
+
+    /// The strict query leaves out an item exactly at the limit, as a disc drawn through the
+    /// k-th nearest photon must, on small trees (a leaf) and large ones (internal nodes).
+    #[test]
+    fn below_is_strict() {
+        for n in [3usize, 1000] {
+            let pts: Vec<Vec3> = (0..n).map(|i| Vec3::new(0.01 * i as f32, 0.0, 0.0)).collect();
+            let t = KdTree::build(pts.clone());
+            let metric = |d: Vec3| d.length_squared();
+            for &limit_index in &[1usize, 2] {
+                let limit = metric(pts[limit_index]);
+                let (mut strict, mut inclusive) = (0, 0);
+                t.for_each_below_with(Vec3::ZERO, limit, metric, |_, d2| {
+                    assert!(d2 < limit);
+                    strict += 1;
+                });
+                t.for_each_within_with(Vec3::ZERO, limit.sqrt(), metric, |_, _| inclusive += 1);
+                assert_eq!(strict, limit_index, "n {n}");
+                assert!(inclusive >= limit_index, "n {n}");
+            }
+        }
     }
 }
