@@ -306,7 +306,7 @@ pub(super) fn flux_within(
 }
 
 /// Directions in which a visible point probes its surface, evenly spaced around it.
-pub(super) const PROBES: usize = 6;
+pub(super) const PROBES: usize = 8;
 
 /// The part of a gather disc that the visible point's own surface fills, as far as rays cast
 /// down onto the surface can tell: the disc cut back by the walls standing on the surface and
@@ -342,7 +342,8 @@ pub(super) struct Footprint {
     /// Whether some probe ended inside the rim (otherwise the footprint is the whole disc).
     cut: bool,
     /// The squared radius of the disc the footprint is cut from: the one asked for, or a
-    /// sixteenth or a 256th of it where little of the larger disc lies on the surface.
+    /// sixteenth or a 256th of it where little of the larger disc lies on the surface and the
+    /// smaller footprint is the larger.
     pub r2: f32,
     /// The footprint's area over the area `π r²` of the disc asked for, in `[0, 1]`.
     pub share: f32,
@@ -373,9 +374,13 @@ impl Footprint {
 
     /// Probes the surface of `hit` (unit normal `ns` on the viewer's side) within the squared
     /// radius `r2`. Where less than a quarter of the disc lies on the surface (a strip narrower
-    /// than the disc, such as the side of a thin slab), the footprint is cut from a disc of a
-    /// quarter of the radius instead, and again if need be: an estimate over a small footprint
-    /// is noisy, but skipping it would leave such surfaces dark.
+    /// than the disc, such as the side of a thin slab), the footprint is also cut from a disc
+    /// of a quarter of the radius, and again if need be, and the largest kept: an estimate over
+    /// a small footprint is noisy, but skipping it would leave such surfaces dark. Eight probes
+    /// keep two in the open quarter of a right-angled corner, so that a footprint there is
+    /// never less than an eighth of the disc (with six, one probe in it made the footprint
+    /// vanish: nothing counted there, or, cut from ever smaller discs, a few photons weighted
+    /// by thousands).
     pub fn probe<A: Accel>(
         frame: &Frame<'_, A>,
         hit: &SurfaceHit,
@@ -385,12 +390,15 @@ impl Footprint {
         c: &mut Counters,
     ) -> Self {
         let mut fp = Footprint::cut_from(frame, hit, ns, r2, rng, c);
-        for shrink in [16.0, 256.0] {
-            if fp.share >= 0.25 {
-                break;
-            }
+        let mut shrink = 1.0;
+        while fp.share < 0.25 && shrink < 256.0 {
+            shrink *= 16.0;
             let small = Footprint::cut_from(frame, hit, ns, r2 / shrink, rng, c);
-            fp = Footprint { share: small.share / shrink, ..small };
+            // The largest footprint, for the most photons: near a corner the smaller disc is cut
+            // the same way (and would only be noisier), in a narrow strip it is cut far less.
+            if small.share / shrink > fp.share {
+                fp = Footprint { share: small.share / shrink, ..small };
+            }
         }
         fp
     }
