@@ -6,9 +6,10 @@
 //! window almost every photon lands outside; with a light behind a door, most land in the
 //! wrong room. Two pieces address it:
 //!
-//! * [`VisibleRegion`]: the cells of a uniform grid around the points a coarse pilot of camera
-//!   rays lands on (64 rays across the long side of the image, each followed through mirrors
-//!   and glass), grown by one cell on every side. Photons stored inside count as *seen*; their
+//! * [`VisibleRegion`]: the cells of grids around the points a coarse pilot of camera rays
+//!   lands on (128 rays across the long side of the image, each followed through mirrors and
+//!   glass), grown by one cell on every side, each point at the cell size of what its ray sees
+//!   (a point far away, seen through a window, marks a coarser cell). Photons stored inside count as *seen*; their
 //!   share of the photons emitted is the map's efficiency in `--stats`.
 //! * [`EmissionGuide`]: learnt from a pilot of photons traced as usual, it tells each emitter
 //!   which of its emission samples lead to seen photons (after Hachisuka and Jensen 2011,
@@ -41,7 +42,7 @@ use rand_pcg::Pcg32;
 use std::collections::HashSet;
 
 /// Camera rays across the long side of the image in the pilot that finds the seen region.
-const PILOT_SIDE: u32 = 64;
+const PILOT_SIDE: u32 = 128;
 
 /// Share of each guided density (and of the photon split) kept uniform (by power).
 pub const DEFENSIVE: f32 = 0.15;
@@ -63,17 +64,23 @@ pub const LEVELS: [(usize, f32); 3] = [(1, 0.45), (8, 0.25), (64, 0.15)];
 /// Pilot photons an emitter needs before its samples are guided (fewer: uniform).
 const MIN_PILOT: u64 = 1024;
 
-/// Cells of space near what the camera sees.
+/// Levels of cell size in the seen region: level `l` has cells `2^l` times the finest.
+const REGION_LEVELS: usize = 16;
+
+/// Cells of space near what the camera sees, at the scale of what each pilot ray sees: a point
+/// far away (the ground seen through a window) covers a cell of a coarser level.
 #[derive(Clone, Debug, Default)]
 pub struct VisibleRegion {
     cell: f32,
     origin: Vec3,
-    cells: HashSet<[i32; 3]>,
+    /// The cells of each level that is in use, finest first.
+    levels: Vec<(usize, HashSet<[i32; 3]>)>,
 }
 
 impl VisibleRegion {
     /// The region seen by a pilot of camera rays through `frame` (see the module doc). The
-    /// cell is twice the median footprint of a pilot ray where it lands.
+    /// finest cell is twice the median footprint of a pilot ray where it lands; each landing
+    /// marks the cells, grown by one, of the level whose cell is at least twice its footprint.
     pub fn of<A: Accel>(frame: &Frame<'_, A>, seed: u64) -> Self {
         let cam = &frame.camera;
         let (w, h) = (cam.width as f32, cam.height as f32);
@@ -93,53 +100,58 @@ impl VisibleRegion {
                 let landing =
                     walk(frame, Start::Ray(ray), Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
                 if let Some(l) = landing {
-                    landings.push((l.hit.p, (l.hit.p - cam.eye).length() * spread));
+                    let footprint = (l.hit.p - cam.eye).length() * spread;
+                    if footprint.is_finite() {
+                        landings.push((l.hit.p, footprint));
+                    }
                 }
             }
         }
         if landings.is_empty() {
             return VisibleRegion::default();
         }
-        let mut footprints: Vec<f32> = landings.iter().map(|l| l.1).filter(|f| f.is_finite()).collect();
+        let mut footprints: Vec<f32> = landings.iter().map(|l| l.1).collect();
         footprints.sort_by(f32::total_cmp);
         let extent = frame.scene.bounds().bounding_sphere().1;
-        let median = footprints.get(footprints.len() / 2).copied().unwrap_or(0.0);
+        let median = footprints[footprints.len() / 2];
         let cell = (2.0 * median).max(1e-5 * extent);
         if !(cell.is_finite() && cell > 0.0) {
             return VisibleRegion::default();
         }
-        let origin = landings[0].0;
-        let mut region = VisibleRegion { cell, origin, cells: HashSet::new() };
-        for (p, _) in landings {
-            let [x, y, z] = region.key(p);
+        let mut region = VisibleRegion { cell, origin: landings[0].0, levels: Vec::new() };
+        let mut sets = vec![HashSet::new(); REGION_LEVELS];
+        for (p, footprint) in landings {
+            let level = ((2.0 * footprint / cell).log2().ceil().max(0.0) as usize).min(REGION_LEVELS - 1);
+            let [x, y, z] = region.key(p, level);
             for k in -1..=1 {
                 for j in -1..=1 {
                     for i in -1..=1 {
-                        region.cells.insert([x + i, y + j, z + k]);
+                        sets[level].insert([x + i, y + j, z + k]);
                     }
                 }
             }
         }
+        region.levels = sets.into_iter().enumerate().filter(|(_, s)| !s.is_empty()).collect();
         region
     }
 
-    fn key(&self, p: Vec3) -> [i32; 3] {
-        let q = ((p - self.origin) / self.cell).floor();
+    fn key(&self, p: Vec3, level: usize) -> [i32; 3] {
+        let q = ((p - self.origin) / (self.cell * (1u32 << level) as f32)).floor();
         [q.x as i32, q.y as i32, q.z as i32]
     }
 
     /// Whether `p` lies in the region.
     #[inline]
     pub fn contains(&self, p: Vec3) -> bool {
-        !self.cells.is_empty() && self.cells.contains(&self.key(p))
+        self.levels.iter().any(|(level, cells)| cells.contains(&self.key(p, *level)))
     }
 
     /// Whether the pilot saw nothing (no surface in view).
     pub fn is_empty(&self) -> bool {
-        self.cells.is_empty()
+        self.levels.is_empty()
     }
 
-    /// The cell side, scene units.
+    /// The finest cell side, scene units.
     pub fn cell(&self) -> f32 {
         self.cell
     }
