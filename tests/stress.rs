@@ -92,6 +92,7 @@ fn a_million_slivers() {
 fn every_case_is_tested() {
     let tested = [
         "furnace",
+        "glass-furnace",
         "grazing",
         "coplanar",
         "touching",
