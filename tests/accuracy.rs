@@ -111,10 +111,7 @@ fn same_seed_same_image_for_any_thread_count() {
     let s = scene("caustics");
     let settings =
         RenderSettings { spp: Some(2), photons: Some(20_000), caustic_photons: Some(20_000), ..settings() };
-    let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&s, &settings))
-    };
+    let run = |threads| common::on_threads(threads, || render(&s, &settings));
     let one = run(1);
     assert_eq!(one, run(2));
     assert_eq!(one, run(3));

@@ -80,10 +80,7 @@ fn path_and_photon_agree_on_cornell() {
 fn path_same_seed_same_image_for_any_thread_count() {
     let s = scene("caustics");
     let settings = RenderSettings { spp: Some(4), ..path_settings() };
-    let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render(&s, &settings, 32).film)
-    };
+    let run = |threads| common::on_threads(threads, || render(&s, &settings, 32).film);
     let one = run(1);
     assert_eq!(one, run(2));
     assert_eq!(one, run(3));

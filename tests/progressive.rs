@@ -59,10 +59,7 @@ fn sppm_furnace_is_two() {
 fn sppm_is_deterministic_across_thread_counts() {
     let s = scene("caustics");
     let settings = RenderSettings { photons: Some(5_000), caustic_photons: Some(5_000), ..sppm(3) };
-    let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render_checked(&s, &settings, 32).film)
-    };
+    let run = |threads| common::on_threads(threads, || render_checked(&s, &settings, 32).film);
     assert_eq!(run(1), run(2));
 }
 
@@ -95,10 +92,7 @@ fn pppm_is_deterministic_across_thread_counts() {
         caustic_photons: Some(5_000),
         ..sppm(3)
     };
-    let run = |threads| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-        pool.install(|| render_checked(&s, &settings, 32).film)
-    };
+    let run = |threads| common::on_threads(threads, || render_checked(&s, &settings, 32).film);
     assert_eq!(run(1), run(2));
 }
 

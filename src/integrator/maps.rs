@@ -15,6 +15,7 @@ use crate::sampling::derive_seed;
 use crate::scene::Scene;
 use crate::stats::Stats;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::cell::OnceCell;
 
 /// What the scene needs, decided before any work.
@@ -309,7 +310,8 @@ impl MapStages<'_> {
             // Tries such that about `caustic_photons` photons are aimed at the targets.
             let tries = ((p.caustic_photons as f64 / acceptance).ceil() as u64)
                 .min(p.caustic_photons.saturating_mul(1000));
-            let share = percent(acceptance);
+            let share = 100.0 * acceptance;
+            let share = if share >= 0.01 { format!("{share:.2}%") } else { format!("{share:.1e}%") };
             let reason =
                 format!("{} specular targets, {share} of emission aimed at them{forced}", targets.len());
             (tries, reason)
@@ -408,9 +410,10 @@ fn drop_empty(stats: &mut Stats, kind: &str, mut maps: Vec<PhotonMap>) -> Vec<Ph
     maps
 }
 
-/// Photons of each map of `out` stored inside `region`.
+/// Photons of each map of `out` stored inside `region` (in parallel: every pass's photons are
+/// looked up).
 fn count_seen(out: &trace::PassOutput, region: &VisibleRegion) -> Vec<u64> {
-    out.maps.iter().map(|m| m.iter().filter(|h| region.contains(h.pos)).count() as u64).collect()
+    out.maps.iter().map(|m| m.par_iter().filter(|h| region.contains(h.pos)).count() as u64).collect()
 }
 
 /// Photons a pilot emitted, and the seen photons it stored.
@@ -429,16 +432,6 @@ fn merge_pilot(pilot: &mut Vec<EmitterPilot>, run: Vec<EmitterPilot>) {
         p.stored += r.stored;
         p.seen += r.seen;
         p.samples.extend(r.samples);
-    }
-}
-
-/// A share as a percentage with enough digits to be told from zero.
-fn percent(share: f64) -> String {
-    let pc = 100.0 * share;
-    if pc >= 0.01 || pc == 0.0 {
-        format!("{pc:.2}%")
-    } else {
-        format!("{pc:.1e}%")
     }
 }
 

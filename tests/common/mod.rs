@@ -28,3 +28,9 @@ pub fn render_checked(s: &Scene, settings: &RenderSettings, size: u32) -> Render
     assert_eq!(out.film.nonfinite_count(), 0, "non-finite pixels");
     out
 }
+
+/// `f` run on a pool of `threads` threads (for the determinism tests: same seed, same image
+/// whatever the thread count).
+pub fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(f)
+}
