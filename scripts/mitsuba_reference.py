@@ -164,7 +164,8 @@ def load_scene(toml_path):
     """Camera, {material name: (material, vertices, triangles)}, lights, as our loader sees them."""
     toml_path = Path(toml_path)
     scene = tomllib.loads(toml_path.read_text())
-    unknown = set(scene) - {"camera", "mesh", "materials", "light", "render"}
+    # [[portal]] only changes where our photons are sent, not the light: nothing to give Mitsuba.
+    unknown = set(scene) - {"camera", "mesh", "materials", "light", "render", "portal"}
     if unknown:
         raise Refused(f"{toml_path}: unknown tables {sorted(unknown)}")
     entries = scene.get("materials", {})

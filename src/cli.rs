@@ -26,8 +26,13 @@ pub enum Command {
     Compare {
         /// The image to judge.
         image: PathBuf,
-        /// The reference.
-        reference: PathBuf,
+        /// The reference (or give --exact).
+        #[arg(required_unless_present = "exact")]
+        reference: Option<PathBuf>,
+        /// Judge against this exact radiance everywhere instead of a reference image (the white
+        /// furnace: 2).
+        #[arg(long, value_name = "RADIANCE", conflicts_with_all = ["reference", "downsample"])]
+        exact: Option<f32>,
         /// Box-downsample the reference by this factor first (when the image is smaller).
         #[arg(long)]
         downsample: Option<usize>,
@@ -187,8 +192,12 @@ pub struct ConvergeArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
     /// Reference image (EXR); the renders take its size (after --downsample).
-    #[arg(long)]
-    pub reference: PathBuf,
+    #[arg(long, required_unless_present = "exact")]
+    pub reference: Option<PathBuf>,
+    /// Judge against this exact radiance everywhere instead of a reference image (the white
+    /// furnace: 2); the renders take the scene camera's size.
+    #[arg(long, value_name = "RADIANCE", conflicts_with_all = ["reference", "downsample"])]
+    pub exact: Option<f32>,
     /// Box-downsample the reference by this factor first (renders get the smaller size).
     #[arg(long)]
     pub downsample: Option<usize>,

@@ -31,8 +31,8 @@ fn main() -> ExitCode {
         Command::Stress(args) => stress(args),
         Command::Converge(args) => converge(args),
         Command::Bench(args) => bench(*args),
-        Command::Compare { image, reference, downsample, json, diff, diff_scale } => {
-            compare(&image, &reference, downsample, json, diff.as_deref(), diff_scale)
+        Command::Compare { image, reference, exact, downsample, json, diff, diff_scale } => {
+            compare(&image, reference.as_deref(), exact, downsample, json, diff.as_deref(), diff_scale)
         }
     };
     match result {
@@ -185,7 +185,8 @@ fn agree(args: cli::AgreeArgs) -> Result<()> {
 
 fn compare(
     image: &std::path::Path,
-    reference: &std::path::Path,
+    reference: Option<&std::path::Path>,
+    exact: Option<f32>,
     downsample: Option<usize>,
     json: bool,
     diff: Option<&std::path::Path>,
@@ -193,7 +194,11 @@ fn compare(
 ) -> Result<()> {
     use photonmap::film::Film;
     let a = Film::read_exr(image)?;
-    let mut b = Film::read_exr(reference)?;
+    let mut b = match (reference, exact) {
+        (Some(path), _) => Film::read_exr(path)?,
+        (None, Some(v)) => exact_film(v, a.width, a.height)?,
+        (None, None) => bail!("give a reference image or --exact"),
+    };
     if let Some(f) = downsample {
         if f == 0 || b.width % f != 0 || b.height % f != 0 {
             bail!("--downsample {f} does not divide the reference's {}x{}", b.width, b.height);
@@ -206,7 +211,7 @@ fn compare(
             image.display(),
             a.width,
             a.height,
-            reference.display(),
+            reference.map_or("--exact".into(), |r| r.display().to_string()),
             b.width,
             b.height
         );
@@ -230,12 +235,26 @@ fn compare(
     Ok(())
 }
 
+/// A reference image of one radiance everywhere (`--exact`).
+fn exact_film(v: f32, width: usize, height: usize) -> Result<photonmap::film::Film> {
+    if !(v.is_finite() && v >= 0.0) {
+        bail!("--exact: {v} is not a finite radiance of at least 0");
+    }
+    let mut film = photonmap::film::Film::new(width, height);
+    film.pixels.fill(glam::Vec3::splat(v));
+    Ok(film)
+}
+
 fn converge(args: cli::ConvergeArgs) -> Result<()> {
     use photonmap::choice::Choice;
     use photonmap::film::Film;
     use photonmap::tools::converge::{self, Method, Study};
     let scene = Scene::load(&args.scene)?;
-    let mut reference = Film::read_exr(&args.reference)?;
+    let mut reference = match (&args.reference, args.exact) {
+        (Some(path), _) => Film::read_exr(path)?,
+        (None, Some(v)) => exact_film(v, scene.camera.width as usize, scene.camera.height as usize)?,
+        (None, None) => bail!("give --reference or --exact"),
+    };
     if let Some(f) = args.downsample {
         if f == 0 || reference.width % f != 0 || reference.height % f != 0 {
             bail!(

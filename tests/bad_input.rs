@@ -73,6 +73,14 @@ fn cases() -> Vec<Case> {
             edits: &[("cornell.toml", "type = \"mirror\"", "type = \"plastic\"")],
             ..case("unknown material type", &["cornell.toml", "line 35", "unknown variant `plastic`"])
         },
+        Case {
+            edits: &[(
+                "cornell.toml",
+                "[camera]",
+                "[[portal]]\ncorners = [[0, 0, 0], [1, 0, 0], [1.2, 1, 0], [0, 1, 0]]\n\n[camera]",
+            )],
+            ..case("portal not a parallelogram", &["cornell.toml", "portal[0].corners", "parallelogram"])
+        },
         Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
         Case {
             flags: &[("--width", "1000000")],

@@ -1,10 +1,11 @@
 //! Guided photon emission (`photon::guide`): in a room lit by the sun through a window, the
 //! photons are sent where the camera looks, many more of them are seen, and the image keeps
-//! its value (each photon's power is divided by the density of its sample).
+//! its value (each photon's power is divided by the density of its sample); the same with the
+//! window declared a portal (`[[portal]]`).
 
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::geometry::Vec3;
-use photonmap::light::LightDesc;
+use photonmap::light::{LightDesc, Portal};
 use photonmap::scene::Scene;
 use photonmap::tools::stress::scenes::{camera, diffuse, Builder};
 #[allow(dead_code)]
@@ -96,4 +97,34 @@ fn a_room_seen_whole_is_left_unguided() {
     let plain = render_checked(&scene, &settings(false, 1), 16);
     assert_eq!(out.film.pixels, plain.film.pixels);
     assert!(efficiency(&out) > 0.5, "{}", efficiency(&out));
+}
+
+#[test]
+fn portal_photons_reach_the_room_and_keep_the_image() {
+    // The window as a portal: half the sun's photons go through it, the rest cover the disc
+    // outside it (none through it), each stratum's photons carrying its density.
+    let mut scene = sunroom(0.3);
+    let v = Vec3::new;
+    scene.portals = vec![Portal::from_corners([
+        v(-0.3, 0.7, 1.0),
+        v(0.3, 0.7, 1.0),
+        v(0.3, 1.3, 1.0),
+        v(-0.3, 1.3, 1.0),
+    ])
+    .unwrap()];
+    let with =
+        |portals: bool, passes: u32| RenderSettings { portals: Some(portals), ..settings(false, passes) };
+    let portal = render_checked(&scene, &with(true, 128), 16);
+    let plain = render_checked(&scene, &with(false, 1), 16);
+    // The portal stratum alone would make it about 0.5 a photon.
+    let (eg, ep) = (efficiency(&portal), efficiency(&plain));
+    assert!(eg > 30.0 * ep, "efficiency with the portal {eg} vs without {ep}");
+    let path = RenderSettings {
+        integrator: Some(IntegratorKind::Path),
+        spp: Some(2048),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let (mg, mp) = (portal.film.mean(), render_checked(&scene, &path, 16).film.mean());
+    assert!((mg / mp - 1.0).abs() < 0.02, "mean with the portal {mg} vs path tracer {mp}");
 }

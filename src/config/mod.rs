@@ -210,6 +210,8 @@ pub struct RenderConfig {
     pub accel: AccelKind,
     /// Embree's robust (watertight) mode.
     pub robust: bool,
+    /// Distant lights emit through the scene's portals.
+    pub portals: bool,
     pub width: u32,
     pub height: u32,
     /// Camera samples per pixel per pass.

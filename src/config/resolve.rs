@@ -77,6 +77,7 @@ impl RenderSettings {
         let c = RenderConfig {
             accel: self.accel.unwrap_or_else(AccelKind::default_kind),
             robust: self.robust.unwrap_or(true),
+            portals: self.portals.unwrap_or(true),
             width,
             height,
             spp: self.spp.unwrap_or(if sppm { SPPM_SPP } else { 64 }),

@@ -155,4 +155,8 @@ settings! {
     /// get there (a sun through a small window, a light behind a door); false: emit as usual
     /// [default: true].
     photon_guide: bool,
+    /// Send half of each distant light's photons through the scene's `[[portal]]` openings
+    /// and the rest over the disc outside them (unbiased either way); false: ignore the
+    /// portals [default: true].
+    portals: bool,
 }

@@ -7,7 +7,9 @@ use crate::accel::Accel;
 use crate::config::{CausticPass, ColorMode, Gathers, PhotonPasses};
 use crate::frame::{Frame, Progress};
 use crate::light::LightSet;
-use crate::photon::guide::{EmissionGuide, EmitterPilot, VisibleRegion, GUIDE_BELOW, GUIDE_GAIN};
+use crate::photon::guide::{
+    effective_efficiency, EmissionGuide, EmitterPilot, VisibleRegion, GUIDE_BELOW, GUIDE_GAIN,
+};
 use crate::photon::irradiance::{self, SitePoint};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
 use crate::photon::trace::{self, Pass, PassSpec, Target};
@@ -79,7 +81,9 @@ impl Analysis {
 const ACCEPTANCE_TRIES: [u64; 3] = [1 << 16, 1 << 20, 1 << 24];
 
 /// Photons of the first pilot of guided emission: an eighth of the pass's budget within these bounds;
-/// the pilot grows 4 times over, up to the last, while it sees fewer than [`PILOT_SEEN`].
+/// the pilot grows 4 times over, up to the last, while it sees fewer than [`PILOT_SEEN`]. (A
+/// pilot grown to 2^22 photons whenever guiding runs, to meet more of the rare paths, did
+/// worse on the sunroom: RMSE 0.0043 against 0.0030 at 20 s, the mean of four seeds.)
 const PILOT_PHOTONS: [u64; 3] = [1 << 16, 1 << 20, 1 << 23];
 const PILOT_SEEN: u64 = 300;
 
@@ -209,16 +213,15 @@ impl MapStages<'_> {
                 let run = run_pilot(stats, size - n, None, n);
                 n = size;
                 merge_pilot(&mut pilot, run);
-                let (emitted, seen) = efficiency(&pilot);
-                if seen >= PILOT_SEEN || seen as f64 >= GUIDE_BELOW * emitted as f64 || size >= PILOT_PHOTONS[2] {
+                let (_, seen) = efficiency(&pilot);
+                if seen >= PILOT_SEEN || effective_efficiency(&pilot) >= GUIDE_BELOW || size >= PILOT_PHOTONS[2] {
                     break;
                 }
                 size = (size * 4).min(PILOT_PHOTONS[2]);
             }
-            let (emitted, seen) = efficiency(&pilot);
-            let share = if emitted > 0 { seen as f64 / emitted as f64 } else { 0.0 };
+            let share = effective_efficiency(&pilot);
             let found = format!(
-                "pilot of {n} photons: {share:.3e} photons stored where the camera looks per photon (cells of {:.3e})",
+                "pilot of {n} photons: {share:.3e} effective photons stored where the camera looks per photon (cells of {:.3e})",
                 region.cell()
             );
             if share >= GUIDE_BELOW {
@@ -230,8 +233,7 @@ impl MapStages<'_> {
                 return (None, format!("{found}; nothing to guide toward"));
             };
             let run = run_pilot(stats, first, Some(&coarse), n);
-            let (emitted2, seen2) = efficiency(&run);
-            let share2 = if emitted2 > 0 { seen2 as f64 / emitted2 as f64 } else { 0.0 };
+            let share2 = effective_efficiency(&run);
             let tried = format!("{found}; a guided pilot of {first}: {share2:.3e}");
             if share2 < GUIDE_GAIN * share {
                 return (None, format!("{tried}, too little gain to guide"));
@@ -431,6 +433,8 @@ fn merge_pilot(pilot: &mut Vec<EmitterPilot>, run: Vec<EmitterPilot>) {
         p.emitted += r.emitted;
         p.stored += r.stored;
         p.seen += r.seen;
+        p.flux += r.flux;
+        p.flux2 += r.flux2;
         p.samples.extend(r.samples);
     }
 }

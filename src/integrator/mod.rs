@@ -106,7 +106,8 @@ impl<'s> Prepared<'s> {
         let accel = stats.run("accel", reason, |_| AnyAccel::build(cfg.accel, &scene.mesh, options))?;
         stats.accel = accel.name().to_string();
         let lights = stats.run("lights", "prepare emitters and light sampling", |_| {
-            LightSet::new(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials)
+            let portals = if cfg.portals { &scene.portals[..] } else { &[] };
+            LightSet::with_portals(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials, portals)
         });
         let dark = lights.lights().iter().filter(|l| !(l.power().max_element() > 0.0)).count();
         if dark > 0 {

@@ -12,12 +12,14 @@
 mod area;
 mod distant;
 mod point;
+pub mod portal;
 mod set;
 mod spot;
 
 pub use area::{AreaLights, EmitterTriangle};
 pub use distant::DistantLight;
 pub use point::PointLight;
+pub use portal::Portal;
 pub use set::{Emission, Emitter, LightSet};
 pub use spot::SpotLight;
 
@@ -104,12 +106,14 @@ pub fn area_lights(mesh: &TriangleMesh, tri_material: &[u32], materials: &[Mater
     AreaLights::from_mesh(mesh, tri_material, materials)
 }
 
-/// The explicit lights followed by the area lights (if any), preprocessed for `mesh.bounds()`.
+/// The explicit lights followed by the area lights (if any), preprocessed for `mesh.bounds()`
+/// (distant lights emit through `portals`, when there are any).
 pub fn build_lights(
     descs: &[LightDesc],
     mesh: &TriangleMesh,
     tri_material: &[u32],
     materials: &[Material],
+    portals: &[Portal],
 ) -> Vec<Light> {
     let mut lights: Vec<Light> = descs.iter().map(Light::from_desc).collect();
     let area = area_lights(mesh, tri_material, materials);
@@ -117,7 +121,7 @@ pub fn build_lights(
         lights.push(Light::Area(area));
     }
     let bounds = mesh.bounds();
-    lights.iter_mut().for_each(|l| l.preprocess(bounds));
+    lights.iter_mut().for_each(|l| l.preprocess(bounds, portals));
     lights
 }
 
@@ -140,10 +144,11 @@ impl Light {
         }
     }
 
-    /// Lets a light adapt to the scene (distant lights record the bounding sphere).
-    pub fn preprocess(&mut self, scene_bounds: Aabb) {
+    /// Lets a light adapt to the scene (distant lights record the bounding sphere and the
+    /// portals).
+    pub fn preprocess(&mut self, scene_bounds: Aabb, portals: &[Portal]) {
         if let Light::Distant(d) = self {
-            d.preprocess(scene_bounds);
+            d.preprocess(scene_bounds, portals);
         }
     }
 
@@ -209,7 +214,7 @@ mod tests {
             LightDesc::Point { position: Vec3::Y, intensity: Vec3::ONE },
             LightDesc::Distant { direction: Vec3::NEG_Z, irradiance: Vec3::ONE },
         ];
-        let lights = build_lights(&descs, &mesh, &[0, 1], &mats);
+        let lights = build_lights(&descs, &mesh, &[0, 1], &mats, &[]);
         assert_eq!(lights.len(), 3);
         assert!(lights[0].is_delta() && lights[1].is_delta() && !lights[2].is_delta());
         assert!(lights[1].power().x > 0.0, "distant light preprocessed");

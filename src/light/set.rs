@@ -3,7 +3,7 @@
 //! emitter of its own (so the photon pass can stratify over each).
 
 use super::LightDesc;
-use super::{build_lights, power_distribution, Light, LightSample};
+use super::{build_lights, power_distribution, Light, LightSample, Portal};
 use crate::geometry::TriangleMesh;
 use crate::material::Material;
 use crate::sampling::Distribution1D;
@@ -46,7 +46,18 @@ impl LightSet {
         tri_material: &[u32],
         materials: &[Material],
     ) -> Self {
-        let lights = build_lights(descs, mesh, tri_material, materials);
+        Self::with_portals(descs, mesh, tri_material, materials, &[])
+    }
+
+    /// As [`LightSet::new`], the distant lights emitting through `portals` (none: as usual).
+    pub fn with_portals(
+        descs: &[LightDesc],
+        mesh: &TriangleMesh,
+        tri_material: &[u32],
+        materials: &[Material],
+        portals: &[Portal],
+    ) -> Self {
+        let lights = build_lights(descs, mesh, tri_material, materials, portals);
         let select = power_distribution(&lights);
         let mut emitters = Vec::new();
         let mut area = None;
@@ -70,6 +81,11 @@ impl LightSet {
     /// Whether there is nothing to sample.
     pub fn is_empty(&self) -> bool {
         self.select.total() <= 0.0
+    }
+
+    /// Whether some distant light emits through portals.
+    pub fn has_portals(&self) -> bool {
+        self.lights.iter().any(|l| matches!(l, Light::Distant(d) if d.has_portals()))
     }
 
     /// Whether some triangles emit (so BSDF-sampled rays can find light).

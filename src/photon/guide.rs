@@ -244,22 +244,40 @@ impl Guided {
 }
 
 /// What the pilot learnt about one emitter: photons emitted and stored, and for each guided
-/// sample the seen photons its path stored over the sample's density and over the pilot's
-/// photons (so that the samples of pilots of any size, guided or not, add up as one estimate).
+/// sample the flux its path stored inside the region (the seen photons times the power each
+/// carries, which includes one over the sample's density: the samples of one pilot, guided or
+/// not, add up to an estimate of the emitter's seen flux).
 #[derive(Clone, Debug, Default)]
 pub struct EmitterPilot {
     pub emitted: u64,
     pub stored: u64,
     /// Of the photons stored, those inside the region.
     pub seen: u64,
+    /// Sums over the seen photons of their power `p` and of `p²`, each photon's power scaled by
+    /// its pilot's photons (so that pilots of any size compare): see [`effective_efficiency`].
+    pub flux: f64,
+    pub flux2: f64,
     pub samples: Vec<([f32; 2], f32)>,
+}
+
+/// Seen photons per photon emitted, counted as photons of equal power would be: `(Σ p)² / (n
+/// Σ p²)` over the seen photons of `n` emitted. With equal powers it is the share of photons
+/// seen; photons of unequal power (guided emission, portals) count for less, as their noise
+/// does. Guiding is judged by it.
+pub fn effective_efficiency(pilot: &[EmitterPilot]) -> f64 {
+    let (emitted, flux, flux2) =
+        pilot.iter().fold((0u64, 0.0, 0.0), |(n, f, f2), e| (n + e.emitted, f + e.flux, f2 + e.flux2));
+    if emitted == 0 || !(flux2 > 0.0) {
+        return 0.0;
+    }
+    flux * flux / (emitted as f64 * flux2)
 }
 
 /// Per emitter: its share of the photon budget and, when guided, the density of its guided
 /// sample dimensions.
 #[derive(Clone, Debug)]
 pub struct EmissionGuide {
-    /// Seen photons per emitter over all seen photons (sums to 1).
+    /// Seen flux per emitter over all seen flux (sums to 1).
     pub seen_share: Vec<f64>,
     pub grids: Vec<Option<(Guided, Grid2)>>,
 }
@@ -382,7 +400,8 @@ mod tests {
         let samples: Vec<([f32; 2], f32)> = (0..4096)
             .map(|i| ([(i % 64) as f32 / 64.0, (i / 64) as f32 / 64.0], f32::from(u8::from(i % 64 < 4))))
             .collect();
-        let pilot = vec![EmitterPilot { emitted: 4096, stored: 4096, seen: 256, samples }];
+        let pilot =
+            vec![EmitterPilot { emitted: 4096, stored: 4096, seen: 256, samples, ..Default::default() }];
         let guide = EmissionGuide::learn(&pilot, &[Guided::Direction]).unwrap();
         let (_, grid) = guide.grids[0].as_ref().unwrap();
         let mut rng = Pcg32::seed_from_u64(2);
@@ -395,7 +414,7 @@ mod tests {
         let (_, pdf) = grid.sample([0.99, 0.5]);
         assert!((pdf - DEFENSIVE - LEVELS[2].1).abs() < 1e-3, "{pdf}");
         assert!(EmissionGuide::learn(
-            &[EmitterPilot { emitted: 10, stored: 0, seen: 0, samples: vec![] }],
+            &[EmitterPilot { emitted: 10, ..Default::default() }],
             &[Guided::Position]
         )
         .is_none());

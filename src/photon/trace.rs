@@ -288,7 +288,7 @@ pub fn pilot<A: Accel>(
             let strata = Strata::new(share.count);
             let grid = guide.and_then(|g| g.grids[share.emitter].as_ref());
             let (mut samples, mut rays, mut stored) = (Vec::new(), 0u64, Vec::new());
-            let (mut total, mut seen_total) = (0u64, 0u64);
+            let (mut total, mut seen_total, mut flux, mut flux2) = (0u64, 0u64, 0.0f64, 0.0f64);
             for i in start..end {
                 let (u_pos, u_dir, density) = emission_samples(&strata, i, grid, &mut rng);
                 let Some(em) = lights.sample_emission(e, u_pos, u_dir) else { continue };
@@ -309,11 +309,22 @@ pub fn pilot<A: Accel>(
                 total += stored.len() as u64;
                 let seen = stored.iter().filter(|h| region.contains(h.pos)).count();
                 seen_total += seen as u64;
-                let seen = seen as f32;
-                let weight = seen / density / n as f32;
+                // The flux of the photons seen (photons of unequal power, from a distant light's
+                // portals and the disc outside them, weigh what they carry): over the samples
+                // of one pilot, an estimate of the seen flux of the emitter.
+                let carried = crate::light::luminance(power);
+                let weight = seen as f32 * carried;
+                // Per photon of a pilot of n, for the effective number of seen photons.
+                let p = carried as f64 * n as f64;
+                flux += seen as f64 * p;
+                flux2 += seen as f64 * p * p;
                 samples.push((if dims == Guided::Position { u_pos } else { u_dir }, weight));
             }
-            (share.emitter, EmitterPilot { emitted: 0, stored: total, seen: seen_total, samples }, rays)
+            (
+                share.emitter,
+                EmitterPilot { emitted: 0, stored: total, seen: seen_total, flux, flux2, samples },
+                rays,
+            )
         })
         .collect();
     let mut out = vec![EmitterPilot::default(); emitters.len()];
@@ -325,6 +336,8 @@ pub fn pilot<A: Accel>(
         out[e].samples.extend(chunk.samples);
         out[e].stored += chunk.stored;
         out[e].seen += chunk.seen;
+        out[e].flux += chunk.flux;
+        out[e].flux2 += chunk.flux2;
         rays += r;
     }
     (out, rays)

@@ -17,6 +17,8 @@ pub struct SceneFile {
     pub materials: BTreeMap<String, MaterialEntry>,
     #[serde(default, rename = "light")]
     pub lights: Vec<LightEntry>,
+    #[serde(default, rename = "portal")]
+    pub portals: Vec<PortalEntry>,
     #[serde(default)]
     pub render: RenderSettings,
 }
@@ -74,6 +76,15 @@ pub struct MaterialEntry {
     pub ns: Option<f32>,
     pub ior: Option<f32>,
     pub ke: Option<[f32; 3]>,
+}
+
+/// `[[portal]]`: an opening distant lights send their photons through (see
+/// [`crate::light::portal`]).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PortalEntry {
+    /// Four corners in order around a parallelogram.
+    pub corners: [[f32; 3]; 4],
 }
 
 /// `[[light]]`: explicit lights (emissive materials are area lights already).

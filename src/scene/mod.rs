@@ -16,7 +16,7 @@ pub use obj::MtlMaterial;
 
 use crate::config::{RenderSettings, MAX_IMAGE_SIDE};
 use crate::geometry::{Aabb, TriangleMesh};
-use crate::light::LightDesc;
+use crate::light::{LightDesc, Portal};
 use crate::material::Material;
 use file::{finite3, nonneg3, reflectance3, Scale};
 use glam::Vec3;
@@ -34,6 +34,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub material_names: Vec<String>,
     pub lights: Vec<LightDesc>,
+    /// Openings distant lights send their photons through (`[[portal]]`).
+    pub portals: Vec<Portal>,
     pub render: RenderSettings,
 }
 
@@ -88,6 +90,8 @@ impl Scene {
         let (tri_material, materials, material_names) = resolve_materials(path, &tri_names, &mtl, &file)?;
         let lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
+        let portals =
+            file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
         validate_render(path, &file.render, &camera)?;
         Ok(Scene {
             path: path.to_owned(),
@@ -97,6 +101,7 @@ impl Scene {
             materials,
             material_names,
             lights,
+            portals,
             render: file.render,
         })
     }
@@ -132,6 +137,9 @@ impl Scene {
                 LightDesc::Point { position, .. } | LightDesc::Spot { position, .. } => *position -= c,
                 LightDesc::Distant { .. } => {}
             }
+        }
+        for p in &mut s.portals {
+            *p = p.translated(-c);
         }
         Some(s)
     }
@@ -352,6 +360,15 @@ fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError>
             irradiance: nonneg3(path, &f("irradiance"), irradiance)?,
         },
     })
+}
+
+fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneError> {
+    let field = format!("portal[{i}].corners");
+    let mut c = [Vec3::ZERO; 4];
+    for (k, corner) in p.corners.iter().enumerate() {
+        c[k] = finite3(path, &format!("{field}[{k}]"), *corner)?;
+    }
+    Portal::from_corners(c).map_err(|e| SceneError::field(path, field, e))
 }
 
 /// Refuses `[render]` settings that cannot be honoured, before any work is done: the table is

@@ -94,6 +94,7 @@ impl Builder {
             materials: self.materials,
             material_names: self.names,
             lights: self.lights,
+            portals: Vec::new(),
             render: RenderSettings::default(),
         }
     }
