@@ -398,5 +398,15 @@ fn info(path: &std::path::Path) -> Result<()> {
     for l in &scene.lights {
         println!("light      {l:?}");
     }
+    for p in &scene.portals {
+        let c = |v: glam::Vec3| v.to_array();
+        println!(
+            "portal     corner {:?}, edges {:?} {:?} ({:.4} m^2)",
+            c(p.corner),
+            c(p.edge_u),
+            c(p.edge_v),
+            p.edge_u.cross(p.edge_v).length()
+        );
+    }
     Ok(())
 }

@@ -102,7 +102,8 @@ fn a_room_seen_whole_is_left_unguided() {
 #[test]
 fn portal_photons_reach_the_room_and_keep_the_image() {
     // The window as a portal: half the sun's photons go through it, the rest cover the disc
-    // outside it (none through it), each stratum's photons carrying its density.
+    // outside it (none through it), each stratum's photons carrying its density; the light
+    // off the ground comes in as the portal's own photons.
     let mut scene = sunroom(0.3);
     let v = Vec3::new;
     scene.portals = vec![Portal::from_corners([
@@ -116,6 +117,9 @@ fn portal_photons_reach_the_room_and_keep_the_image() {
         |portals: bool, passes: u32| RenderSettings { portals: Some(portals), ..settings(false, passes) };
     let portal = render_checked(&scene, &with(true, 128), 16);
     let plain = render_checked(&scene, &with(false, 1), 16);
+    let stage = portal.stats.stages.iter().find(|s| s.name == "photons.portals").unwrap();
+    assert!(stage.ran && stage.reason.contains("1 portals"), "{stage:?}");
+    assert!(!plain.stats.stages.iter().any(|s| s.name == "photons.portals"));
     // The portal stratum alone would make it about 0.5 a photon.
     let (eg, ep) = (efficiency(&portal), efficiency(&plain));
     assert!(eg > 30.0 * ep, "efficiency with the portal {eg} vs without {ep}");
@@ -127,4 +131,42 @@ fn portal_photons_reach_the_room_and_keep_the_image() {
     };
     let (mg, mp) = (portal.film.mean(), render_checked(&scene, &path, 16).film.mean());
     assert!((mg / mp - 1.0).abs() < 0.02, "mean with the portal {mg} vs path tracer {mp}");
+}
+
+#[test]
+fn a_portal_anywhere_keeps_the_image() {
+    // A portal across the middle of the Cornell box, its inside toward the camera: every path
+    // crossing it toward the camera after a diffuse bounce is cut, and the light it carried
+    // comes in as the portal's photons instead (a path traced from the portal outward). Light
+    // sits on both sides (the ceiling light straddles the plane). The image keeps its value.
+    let mut scene = common::scene("cornell");
+    let v = Vec3::new;
+    let z = 0.28;
+    scene.portals = vec![Portal::from_corners([
+        v(0.0, 0.0, z),
+        v(0.556, 0.0, z),
+        v(0.556, 0.5488, z),
+        v(0.0, 0.5488, z),
+    ])
+    .unwrap()];
+    let run = |portals: bool| {
+        let settings = RenderSettings {
+            integrator: Some(IntegratorKind::Sppm),
+            portals: Some(portals),
+            passes: Some(48),
+            photons: Some(50_000),
+            spp: Some(2),
+            seed: Some(4),
+            ..Default::default()
+        };
+        render_checked(&scene, &settings, 32)
+    };
+    let (with, without) = (run(true), run(false));
+    let stage = with.stats.stages.iter().find(|s| s.name == "photons.portals").unwrap();
+    assert!(stage.ran, "{stage:?}");
+    let r = common::reference("cornell").downsample(2).mean();
+    let (mw, mo) = (with.film.mean(), without.film.mean());
+    eprintln!("mean with the portal {mw:.5}, without {mo:.5}, reference {r:.5}");
+    assert!((mw / r - 1.0).abs() < 0.01, "with the portal {mw} against {r}");
+    assert!((mw / mo - 1.0).abs() < 0.01, "with the portal {mw} against {mo} without");
 }

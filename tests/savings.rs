@@ -104,6 +104,7 @@ fn caustic_flux(s: &Scene, accel: &AnyAccel, aim: bool, n: u64, seed: u64) -> (f
         targets: &targets,
         aim,
         guide: None,
+        portals: None,
         seed,
     };
     let out = photonmap::dispatch!(accel, a => trace::trace_pass(s, a, &lights, &spec, &Quiet));

@@ -12,7 +12,8 @@ use crate::photon::guide::{
 };
 use crate::photon::irradiance::{self, SitePoint};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
-use crate::photon::trace::{self, Pass, PassSpec, Target};
+use crate::photon::portal::PortalSet;
+use crate::photon::trace::{self, Pass, PassSpec, Portals, Target};
 use crate::sampling::derive_seed;
 use crate::scene::Scene;
 use crate::stats::Stats;
@@ -33,6 +34,8 @@ pub struct Analysis {
     aim: OnceCell<Aim>,
     /// What the camera sees and where photons are sent, worked out at the first photon pass.
     guide: OnceCell<Guide>,
+    /// The portals of the photon pass and their incoming flux, worked out at the first pass.
+    portals: OnceCell<PortalSet>,
 }
 
 /// The region the camera sees (for the maps' efficiency) and, when a pilot found that few
@@ -66,6 +69,7 @@ impl Analysis {
             light_power: lights.total_power(),
             aim: OnceCell::new(),
             guide: OnceCell::new(),
+            portals: OnceCell::new(),
         }
     }
 
@@ -138,7 +142,10 @@ impl MapStages<'_> {
             stats.skip("photons.indirect", why);
             return (Vec::new(), Vec::new());
         }
-        let guide = analysis.guide.get_or_init(|| self.guide(frame, seed, stats));
+        let set = analysis.portals.get_or_init(|| self.portal_set(frame, seed, stats));
+        let outside = crate::integrator::path::Outside { frame, max_depth: p.max_bounces };
+        let portals = (!set.is_empty()).then_some(Portals { set, outside: &outside });
+        let guide = analysis.guide.get_or_init(|| self.guide(frame, portals, seed, stats));
         progress.start("indirect photons", p.photons);
         let why = if guide.emission.is_some() {
             "diffuse surfaces and lit scene; emission guided toward what the camera sees"
@@ -154,6 +161,7 @@ impl MapStages<'_> {
                 targets: &[],
                 aim: false,
                 guide: guide.emission.as_ref(),
+                portals,
                 seed,
             };
             trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
@@ -174,7 +182,38 @@ impl MapStages<'_> {
 
     /// The region the camera sees and, unless `--photon-guide false` or the photons reach it
     /// well enough already, the guided emission learnt from a pilot (a stage of its own).
-    fn guide<A: Accel>(&self, frame: &Frame<'_, A>, seed: u64, stats: &mut Stats) -> Guide {
+    /// The scene's portals (none with `--portals false`) with their incoming flux estimated
+    /// (stage `photons.portals`).
+    fn portal_set<A: Accel>(&self, frame: &Frame<'_, A>, seed: u64, stats: &mut Stats) -> PortalSet {
+        let portals = frame.lights.portals();
+        if portals.is_empty() {
+            return PortalSet::default();
+        }
+        let outside = crate::integrator::path::Outside { frame, max_depth: self.passes.max_bounces };
+        let eye = frame.scene.camera.eye;
+        let (set, reason) = stats.run("photons.portals", "", |stats| {
+            let (set, rays) = PortalSet::new(portals, eye, &outside, derive_seed(seed, 0x9077, 0));
+            stats.rays.photon += rays;
+            let flux: f32 = set.powers().iter().map(|&p| crate::light::luminance(p)).sum();
+            let reason = format!(
+                "{} portals: paths cut where they cross one inward after a diffuse bounce; {flux:.3e} W estimated to come in that way, brought by the portals' photons",
+                set.len()
+            );
+            (set, reason)
+        });
+        if let Some(stage) = stats.stages.last_mut() {
+            stage.reason = reason;
+        }
+        set
+    }
+
+    fn guide<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        portals: Option<Portals<'_>>,
+        seed: u64,
+        stats: &mut Stats,
+    ) -> Guide {
         let p = self.passes;
         let region = VisibleRegion::of(frame, seed);
         let why_not = if !p.guide {
@@ -188,7 +227,7 @@ impl MapStages<'_> {
             stats.skip("photons.guide", why);
             return Guide { region, emission: None };
         }
-        let kinds = trace::guided_kinds(frame.lights);
+        let kinds = trace::guided_kinds(frame.lights, portals);
         let (emission, reason) = stats.run("photons.guide", "", |stats| {
             let mut pilot = Vec::new();
             let mut n = 0u64;
@@ -201,6 +240,7 @@ impl MapStages<'_> {
                     p.max_bounces,
                     &region,
                     guide,
+                    portals,
                     derive_seed(seed, 0x9170, n),
                 );
                 stats.rays.photon += rays;
@@ -343,13 +383,15 @@ impl MapStages<'_> {
                 targets,
                 aim,
                 guide: None,
+                portals: None,
                 seed: seed ^ 0x5EED,
             };
             trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
         });
         progress.finish();
         stats.rays.photon += out.rays;
-        let region = &analysis.guide.get_or_init(|| self.guide(frame, seed, stats)).region;
+        // (Learnt here only when no indirect pass runs: the region alone is read.)
+        let region = &analysis.guide.get_or_init(|| self.guide(frame, None, seed, stats)).region;
         let seen = count_seen(&out, region);
         let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
         record_maps(stats, "caustic", &maps, &seen);

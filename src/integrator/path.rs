@@ -85,11 +85,45 @@ impl<A: Accel> PassRenderer for PathTracer<'_, '_, A> {
 pub fn radiance<A: Accel>(
     s: &Frame<'_, A>,
     max_depth: u32,
-    mut ray: Ray,
+    ray: Ray,
     first: Option<Hit>,
     rng: &mut Pcg32,
     c: &mut Counters,
 ) -> Vec3 {
+    trace_radiance(s, max_depth, ray, first, false, rng, c)
+}
+
+/// Radiance coming in through a portal from outside, for the photons it emits
+/// ([`crate::photon::portal`]): the path tracer from the portal outward, counting only light
+/// that met a diffuse or glossy surface (emission seen directly or through mirrors and glass
+/// is left out: the lights' own photons bring it in).
+pub struct Outside<'f, 'a, A: Accel> {
+    pub frame: &'f Frame<'a, A>,
+    pub max_depth: u32,
+}
+
+impl<A: Accel> crate::photon::portal::Outside for Outside<'_, '_, A> {
+    fn incoming(&self, p: Vec3, out: Vec3, rng: &mut Pcg32) -> (Vec3, u64) {
+        let mut c = Counters::default();
+        let ray = Ray::new(p, out);
+        let first = self.frame.accel.intersect(&ray);
+        let l = trace_radiance(self.frame, self.max_depth, ray, first, true, rng, &mut c);
+        (l, 1 + c.rays.path + c.rays.shadow)
+    }
+}
+
+/// The path tracer's loop; `bounced_only`: emission counts only after a diffuse or glossy
+/// vertex.
+fn trace_radiance<A: Accel>(
+    s: &Frame<'_, A>,
+    max_depth: u32,
+    mut ray: Ray,
+    first: Option<Hit>,
+    bounced_only: bool,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> Vec3 {
+    let mut diffuse_behind = !bounced_only;
     let mis = s.lights.has_area();
     let mut beta = Vec3::ONE;
     let mut l = Vec3::ZERO;
@@ -111,7 +145,7 @@ pub fn radiance<A: Accel>(
 
         // Emission reached by the camera ray or by the previous vertex's BSDF sample.
         let le = m.emitted(hit.n, wo);
-        if le != Vec3::ZERO {
+        if le != Vec3::ZERO && diffuse_behind {
             let w = if specular || !mis {
                 1.0
             } else {
@@ -138,6 +172,7 @@ pub fn radiance<A: Accel>(
             break;
         }
         specular = bs.delta;
+        diffuse_behind |= !bs.delta;
         prev_pdf = bs.pdf;
         prev_p = hit.p;
         ray = Ray::new(hit.spawn(bs.wi), bs.wi);

@@ -19,9 +19,6 @@ use std::f32::consts::PI;
 /// outside them).
 pub const PORTAL_SHARE: f32 = 0.5;
 
-/// Scale of the photons sent near the portals, in scene radii.
-const NEAR_SCALE: f32 = 0.1;
-
 /// A distant light; `direction` is the (unit) way the light travels.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DistantLight {
@@ -56,7 +53,7 @@ impl DistantLight {
         self.portals = Projected::new(portals, &Frame::from_z(self.direction), self.scene_center);
     }
 
-    /// Whether photons start only on lines through portals.
+    /// Whether half the photons start on lines through portals.
     pub fn has_portals(&self) -> bool {
         !self.portals.is_empty()
     }
@@ -64,6 +61,17 @@ impl DistantLight {
     /// `E pi R^2` (portals change where photons start, not the flux).
     pub fn power(&self) -> Vec3 {
         self.irradiance * PI * self.scene_radius * self.scene_radius
+    }
+
+    /// The flux the photon budget is split by: the power, or with portals the flux through
+    /// them over the share of photons sent that way (what photons toward the inside carry;
+    /// the disc's other photons light only the outside).
+    pub fn budget_power(&self) -> Vec3 {
+        if self.has_portals() && self.scene_radius > 0.0 {
+            self.irradiance * (self.portals.area() / PORTAL_SHARE)
+        } else {
+            self.power()
+        }
     }
 
     /// Toward the light from anywhere: `wi = -direction`, infinite distance, `li = E`, delta.
@@ -82,12 +90,11 @@ impl DistantLight {
     /// starting just outside the sphere and travelling along `direction`.
     ///
     /// With portals the disk is split in two strata. `u_pos[0] < PORTAL_SHARE` picks a point
-    /// of the portals' projections (density `PORTAL_SHARE / A_portals`). The rest pick a point
-    /// of the disk outside them (`None` for a point inside a portal or off the disk), half
-    /// uniformly and half near the portals ([`Projected::sample_near`], at the scale of a
-    /// tenth of the scene's radius): light off the ground just outside a window reaches the
-    /// window far more often than light off the ground far away. Every line keeps one stratum
-    /// and its density, so the light's flux is all there and the estimate is unbiased.
+    /// of the portals' projections (density `PORTAL_SHARE / A_portals`): light straight in.
+    /// The rest pick a uniform point of the disk, `None` inside a portal's projection (density
+    /// `(1 - PORTAL_SHARE) / (pi R^2)`): light on the outside, whose bounces in through the
+    /// portals the portals' own photons bring ([`crate::photon::portal`]). Every line keeps
+    /// one stratum and its density, so the light's flux is all there.
     pub fn sample_emission(&self, u_pos: [f32; 2]) -> Option<EmissionSample> {
         let r = self.scene_radius;
         if r <= 0.0 || !r.is_finite() {
@@ -101,18 +108,12 @@ impl DistantLight {
             let q = self.portals.sample([u_pos[0] / PORTAL_SHARE, u_pos[1]]);
             (q, PORTAL_SHARE / self.portals.area())
         } else {
-            let v = ((u_pos[0] - PORTAL_SHARE) / (1.0 - PORTAL_SHARE)).min(1.0);
-            let scale = NEAR_SCALE * r;
-            let q = if v < 0.5 {
-                sample_uniform_disk_concentric([2.0 * v, u_pos[1]]) * r
-            } else {
-                self.portals.sample_near([(2.0 * v - 1.0).min(1.0), u_pos[1]], scale)
-            };
-            if q.length() > r || self.portals.coverage(q) > 0 {
+            let u = [((u_pos[0] - PORTAL_SHARE) / (1.0 - PORTAL_SHARE)).min(1.0), u_pos[1]];
+            let q = sample_uniform_disk_concentric(u) * r;
+            if self.portals.coverage(q) > 0 {
                 return None;
             }
-            let density = 0.5 / disk + 0.5 * self.portals.density_near(q, scale);
-            (q, (1.0 - PORTAL_SHARE) * density)
+            (q, (1.0 - PORTAL_SHARE) / disk)
         };
         let back = r * 1.001 + 1e-4;
         let ray_origin = self.scene_center + frame.from_local(Vec3::new(d.x, d.y, -back));

@@ -6,9 +6,8 @@
 //! photons along lines through its portals (each point of a portal's projection onto the plane
 //! perpendicular to the light equally likely) and the other half over the rest of its disc,
 //! each photon's power divided by its stratum's density (`DistantLight::sample_emission`). The
-//! portal changes where photons go, not the answer: sunlight off the ground outside that comes
-//! in through the window still does, from the second stratum (which guided emission, when it
-//! runs, then concentrates where it matters).
+//! light that comes in off surfaces outside is the portals' own photons' work
+//! ([`crate::photon::portal`]).
 
 use crate::sampling::Frame;
 use glam::{Vec2, Vec3};
@@ -97,38 +96,6 @@ impl Projected {
         o + s * a + u[1] * b
     }
 
-    /// A point near the projections: a portal picked by area (`u[0]`, rescaled), then a point
-    /// at distance `rho` from its centre in a uniform direction (`u[1]`), `rho` drawn from the
-    /// heavy-tailed density of [`Projected::density_near`]: most points within a few `scale`,
-    /// every point of the plane possible.
-    pub fn sample_near(&self, u: [f32; 2], scale: f32) -> Vec2 {
-        let total = self.area();
-        let x = u[0] * total;
-        let i = self.cumulative.partition_point(|&c| c <= x).min(self.shapes.len() - 1);
-        let lo = if i == 0 { 0.0 } else { self.cumulative[i - 1] };
-        let v = ((x - lo) / (self.cumulative[i] - lo)).clamp(0.0, 1.0 - f32::EPSILON);
-        // F(rho) = 1 - scale / sqrt(rho^2 + scale^2), inverted.
-        let rho = scale * ((1.0 / ((1.0 - v) * (1.0 - v))) - 1.0).max(0.0).sqrt();
-        let phi = 2.0 * std::f32::consts::PI * u[1];
-        centre(self.shapes[i]) + rho * Vec2::new(phi.cos(), phi.sin())
-    }
-
-    /// Density (per unit area of the plane) of [`Projected::sample_near`] at `q`: the mixture
-    /// over portals (by area) of `scale / (2 pi (rho^2 + scale^2)^(3/2))`, `rho` the distance
-    /// from the portal's centre.
-    pub fn density_near(&self, q: Vec2, scale: f32) -> f32 {
-        let total = self.area();
-        let mut lo = 0.0;
-        let mut sum = 0.0;
-        for (shape, &c) in self.shapes.iter().zip(&self.cumulative) {
-            let rho2 = (q - centre(*shape)).length_squared();
-            let k = scale / (2.0 * std::f32::consts::PI * (rho2 + scale * scale).powf(1.5));
-            sum += (c - lo) / total * k;
-            lo = c;
-        }
-        sum
-    }
-
     /// How many projections cover `q` (plane coordinates).
     pub fn coverage(&self, q: Vec2) -> usize {
         self.shapes
@@ -142,10 +109,6 @@ impl Projected {
             })
             .count()
     }
-}
-
-fn centre([o, a, b]: [Vec2; 3]) -> Vec2 {
-    o + 0.5 * (a + b)
 }
 
 #[cfg(test)]
@@ -204,27 +167,5 @@ mod tests {
         let expected = small.area() / p.area();
         assert!((share - expected).abs() < 0.01, "{share} against {expected}");
         assert_eq!(p.coverage(Vec2::new(100.0, 100.0)), 0);
-    }
-
-    #[test]
-    fn points_near_the_portals_have_the_density_said() {
-        // E[1 / density] over the samples estimates the area of the plane they cover; over a
-        // disc of radius 6 around the portals (samples outside it dropped) that is pi 36.
-        let frame = Frame::from_z(Vec3::new(0.2, -0.3, -1.0).normalize());
-        let big = Portal { corner: Vec3::new(3.0, 0.0, 0.0), edge_u: Vec3::X * 2.0, edge_v: Vec3::Y * 1.5 };
-        let p = Projected::new(&[window(), big], &frame, Vec3::ZERO);
-        let (scale, radius, n) = (0.8, 6.0f32, 400);
-        let mut sum = 0.0f64;
-        for i in 0..n * n {
-            let u = [((i % n) as f32 + 0.5) / n as f32, ((i / n) as f32 + 0.5) / n as f32];
-            let q = p.sample_near(u, scale);
-            assert!(q.is_finite());
-            if q.length() <= radius {
-                sum += 1.0 / p.density_near(q, scale) as f64;
-            }
-        }
-        let area = sum / (n * n) as f64;
-        let expected = std::f64::consts::PI * 36.0;
-        assert!((area / expected - 1.0).abs() < 0.02, "{area} against {expected}");
     }
 }

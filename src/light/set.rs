@@ -36,6 +36,8 @@ pub struct LightSet {
     select: Distribution1D,
     emitters: Vec<Emitter>,
     area: Option<usize>,
+    /// The portals distant lights emit through (and the photon pass cuts at).
+    portals: Vec<Portal>,
 }
 
 impl LightSet {
@@ -71,11 +73,14 @@ impl LightSet {
                         power: tri.power(),
                     }));
                 }
+                Light::Distant(d) => {
+                    emitters.push(Emitter { light: i, triangle: None, power: d.budget_power() })
+                }
                 _ => emitters.push(Emitter { light: i, triangle: None, power: l.power() }),
             }
         }
         emitters.retain(|e| e.power.max_element() > 0.0 && e.power.is_finite());
-        LightSet { lights, select, emitters, area }
+        LightSet { lights, select, emitters, area, portals: portals.to_vec() }
     }
 
     /// Whether there is nothing to sample.
@@ -83,9 +88,9 @@ impl LightSet {
         self.select.total() <= 0.0
     }
 
-    /// Whether some distant light emits through portals.
-    pub fn has_portals(&self) -> bool {
-        self.lights.iter().any(|l| matches!(l, Light::Distant(d) if d.has_portals()))
+    /// The portals this set was built with (none with `--portals false`).
+    pub fn portals(&self) -> &[Portal] {
+        &self.portals
     }
 
     /// Whether some triangles emit (so BSDF-sampled rays can find light).

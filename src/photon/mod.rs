@@ -34,4 +34,5 @@ pub mod irradiance;
 pub mod kdtree;
 pub mod map;
 pub mod pack;
+pub mod portal;
 pub mod trace;

@@ -26,11 +26,16 @@
 //!   position (distant lights) or direction (the others) follows the learnt density; each
 //!   photon's power is divided by its sample's density, so the estimates keep their value.
 //!
+//! * Portals ([`super::portal`]): paths crossing a portal inward after a diffuse bounce are
+//!   cut there, and each portal is an emitter of its own (after the lights) whose photons carry
+//!   the light that came in that way.
+//!
 //! Work is split into fixed chunks, each with its own generator seeded from (seed, pass, chunk),
 //! so the maps are identical for any number of threads.
 
 use super::guide::{EmissionGuide, EmitterPilot, Grid2, Guided, VisibleRegion, DEFENSIVE};
 use super::map::PhotonHit;
+use super::portal::{Outside, PortalSet};
 use crate::accel::Accel;
 use crate::config::ColorMode;
 use crate::frame::Progress;
@@ -232,7 +237,60 @@ pub struct PassSpec<'a> {
     pub aim: bool,
     /// Where the photons of an indirect pass are sent ([`super::guide`]); `None`: as emitted.
     pub guide: Option<&'a EmissionGuide>,
+    /// The portals that cut paths and emit photons of their own (indirect passes only).
+    pub portals: Option<Portals<'a>>,
     pub seed: u64,
+}
+
+/// The scene's portals and the radiance their photons carry in.
+#[derive(Clone, Copy)]
+pub struct Portals<'a> {
+    pub set: &'a PortalSet,
+    pub outside: &'a dyn Outside,
+}
+
+impl std::fmt::Debug for Portals<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Portals").field("set", self.set).finish()
+    }
+}
+
+/// The emitters of a pass: the lights', then (indirect passes with portals) one per portal,
+/// numbered after the lights (`light` = number of lights + the portal's index).
+pub fn sources(lights: &LightSet, portals: Option<Portals<'_>>) -> Vec<Emitter> {
+    let mut out = lights.emitters().to_vec();
+    if let Some(p) = portals {
+        let base = lights.lights().len();
+        out.extend(p.set.powers().iter().enumerate().map(|(i, &power)| Emitter {
+            light: base + i,
+            triangle: None,
+            power,
+        }));
+    }
+    out
+}
+
+/// A photon of emitter `e` of [`sources`]: its start, direction and flux, whether it carries
+/// light that was already bounced (a portal's photon, stored at its first hit), and the rays
+/// traced to make it.
+#[inline]
+fn emit(
+    lights: &LightSet,
+    portals: Option<Portals<'_>>,
+    e: &Emitter,
+    u_pos: [f32; 2],
+    u_dir: [f32; 2],
+    rng: &mut Pcg32,
+) -> (Option<crate::light::Emission>, bool, u64) {
+    match (e.light.checked_sub(lights.lights().len()), portals) {
+        (Some(i), Some(p)) => {
+            let ((origin, dir, power), rays) = p.set.emit(i, u_pos, u_dir, p.outside, rng);
+            let em = (power.max_element() > 0.0).then_some(crate::light::Emission { origin, dir, power });
+            (em, true, rays)
+        }
+        (Some(_), None) => (None, false, 0),
+        (None, _) => (lights.sample_emission(e, u_pos, u_dir), false, 0),
+    }
 }
 
 /// The photon chunks of `shares`: (share, first photon, end).
@@ -251,8 +309,8 @@ fn chunks(shares: &[EmitterShare]) -> Vec<(usize, u64, u64)> {
 
 /// Which of an emitter's sample dimensions guiding reshapes.
 fn guided_dims(lights: &LightSet, e: &Emitter) -> Guided {
-    match lights.lights()[e.light] {
-        Light::Distant(_) => Guided::Position,
+    match lights.lights().get(e.light) {
+        Some(Light::Distant(_)) => Guided::Position,
         _ => Guided::Direction,
     }
 }
@@ -270,9 +328,10 @@ pub fn pilot<A: Accel>(
     max_bounces: u32,
     region: &VisibleRegion,
     guide: Option<&EmissionGuide>,
+    portals: Option<Portals<'_>>,
     seed: u64,
 ) -> (Vec<EmitterPilot>, u64) {
-    let emitters = lights.emitters();
+    let emitters = &sources(lights, portals)[..];
     let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, 0x9170, u64::MAX));
     let (shares, _) = allocate(emitters, n, ColorMode::Rgb, None, &mut alloc_rng);
     let chunks = chunks(&shares);
@@ -291,18 +350,20 @@ pub fn pilot<A: Accel>(
             let (mut total, mut seen_total, mut flux, mut flux2) = (0u64, 0u64, 0.0f64, 0.0f64);
             for i in start..end {
                 let (u_pos, u_dir, density) = emission_samples(&strata, i, grid, &mut rng);
-                let Some(em) = lights.sample_emission(e, u_pos, u_dir) else { continue };
+                let (em, bounced, r) = emit(lights, portals, e, u_pos, u_dir, &mut rng);
+                rays += r;
+                let Some(em) = em else { continue };
                 stored.clear();
                 let power = share.photon_power(em.power) / density;
+                let start = Start { origin: em.origin, dir: em.dir, power, bounced };
                 rays += trace_photon(
                     scene,
                     accel,
                     Pass::Indirect,
-                    em.origin,
-                    em.dir,
-                    power,
+                    start,
                     None,
                     max_bounces,
+                    portals.map(|p| p.set),
                     &mut rng,
                     &mut stored,
                 );
@@ -344,8 +405,8 @@ pub fn pilot<A: Accel>(
 }
 
 /// The guided dimensions of every emitter, in the order of [`LightSet::emitters`].
-pub fn guided_kinds(lights: &LightSet) -> Vec<Guided> {
-    lights.emitters().iter().map(|e| guided_dims(lights, e)).collect()
+pub fn guided_kinds(lights: &LightSet, portals: Option<Portals<'_>>) -> Vec<Guided> {
+    sources(lights, portals).iter().map(|e| guided_dims(lights, e)).collect()
 }
 
 /// Traces one pass; `progress` advances by the photons of each finished chunk.
@@ -356,8 +417,9 @@ pub fn trace_pass<A: Accel>(
     spec: &PassSpec<'_>,
     progress: &dyn Progress,
 ) -> PassOutput {
-    let PassSpec { pass, n, color, max_bounces, targets, aim, guide, seed } = *spec;
-    let emitters = lights.emitters();
+    let PassSpec { pass, n, color, max_bounces, targets, aim, guide, portals, seed } = *spec;
+    let portals = portals.filter(|_| pass == Pass::Indirect);
+    let emitters = &sources(lights, portals)[..];
     let mut alloc_rng = Pcg32::seed_from_u64(derive_seed(seed, pass as u64, u64::MAX));
     let (shares, emitted) = allocate(emitters, n, color, guide.map(|g| &g.seen_share[..]), &mut alloc_rng);
     // Fixed chunks over the concatenated shares.
@@ -376,20 +438,23 @@ pub fn trace_pass<A: Accel>(
             let grid = guide.and_then(|g| g.grids[share.emitter].as_ref());
             for i in start..end {
                 let (u_pos, u_dir, density) = emission_samples(&strata, i, grid, &mut rng);
-                let Some(em) = lights.sample_emission(e, u_pos, u_dir) else { continue };
+                let (em, bounced, r) = emit(lights, portals, e, u_pos, u_dir, &mut rng);
+                rays += r;
+                let Some(em) = em else { continue };
                 if pass == Pass::Caustic && aim && !targets.iter().any(|t| t.hit_by(em.origin, em.dir)) {
                     continue;
                 }
                 paths += 1;
+                let power = share.photon_power(em.power) / density;
+                let start = Start { origin: em.origin, dir: em.dir, power, bounced };
                 rays += trace_photon(
                     scene,
                     accel,
                     pass,
-                    em.origin,
-                    em.dir,
-                    share.photon_power(em.power) / density,
+                    start,
                     share.channel,
                     max_bounces,
+                    portals.map(|p| p.set),
                     &mut rng,
                     &mut out[share.map],
                 );
@@ -433,26 +498,45 @@ fn emission_samples(
     }
 }
 
-/// Follows one photon, storing copies at diffuse hits as `pass` requires. Returns rays cast.
+/// Where a photon starts: from a light, or (`bounced`) from a portal with light that met a
+/// diffuse surface outside already (stored from its first hit on).
+#[derive(Clone, Copy, Debug)]
+struct Start {
+    origin: Vec3,
+    dir: Vec3,
+    power: Vec3,
+    bounced: bool,
+}
+
+/// Follows one photon, storing copies at diffuse hits as `pass` requires; with `cut`, a photon
+/// past a diffuse bounce stops where it crosses a portal inward. Returns rays cast.
 #[allow(clippy::too_many_arguments)]
 fn trace_photon<A: Accel>(
     scene: &Scene,
     accel: &A,
     pass: Pass,
-    origin: Vec3,
-    dir: Vec3,
-    mut power: Vec3,
+    start: Start,
     channel: Option<usize>,
     max_bounces: u32,
+    cut: Option<&PortalSet>,
     rng: &mut Pcg32,
     out: &mut Vec<PhotonHit>,
 ) -> u64 {
-    let mut ray = Ray::new(origin, dir);
-    let mut specular_only = true;
+    let mut ray = Ray::new(start.origin, start.dir);
+    let mut power = start.power;
+    let mut specular_only = !start.bounced;
     let mut rays = 0;
     for bounce in 0..=max_bounces {
         rays += 1;
-        let Some(hit) = accel.intersect(&ray) else { break };
+        let hit = accel.intersect(&ray);
+        if !specular_only && bounce > 0 {
+            if let Some(c) = cut {
+                if c.cuts(ray.origin, ray.dir, hit.map_or(f32::INFINITY, |h| h.t)) {
+                    break;
+                }
+            }
+        }
+        let Some(hit) = hit else { break };
         let Some(n) = scene.mesh.normal(hit.prim) else { break };
         let (p, err) = scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
         let m = scene.material(hit.prim);
