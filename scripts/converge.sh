@@ -7,7 +7,8 @@
 #   REFS_DIR  directory of the reference EXRs (default ../shared/scenes/refs)
 #   BUDGETS   seconds, comma-separated (default 1,2,5,10,20,45: the peers' 5, 20 and 45 s among them)
 #   METHODS   comma-separated (default all: photon-rgb,photon-channel,final-gather,sppm,path)
-# SCENES="cornell caustics" limits the scenes; OUT=dir changes the output directory.
+# SCENES="cornell caustics" limits the scenes (a variant such as sunroom-portal is found beside
+# its scene; REF_sunroom_portal=sunroom names its reference); OUT=dir changes the output directory.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 refs=${1:-../shared/scenes/refs}
@@ -18,7 +19,12 @@ mkdir -p "$out"
 cargo build --release --locked -q
 for s in ${SCENES:-cornell caustics pointlight furnace}; do
     echo "== $s (budgets $budgets s)"
-    ./target/release/photonmap converge "scenes/$s/$s.toml" --reference "$refs/$s.exr" \
+    # A variant (sunroom-portal) lives beside its scene and shares its reference (REF_sunroom_portal=sunroom).
+    toml=scenes/$s/$s.toml
+    [ -f "$toml" ] || toml=$(ls scenes/*/"$s.toml")
+    ref_var="REF_${s//-/_}"
+    ref=${!ref_var:-$s}
+    ./target/release/photonmap converge "$toml" --reference "$refs/$ref.exr" \
         --budgets "$budgets" --methods "$methods" --csv "$out/$s.csv" --plot "$out/$s.svg" \
         --peers docs/converge/peers.csv
     if command -v rsvg-convert >/dev/null; then
