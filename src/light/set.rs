@@ -15,7 +15,8 @@ pub struct Emitter {
     pub light: usize,
     /// Index into the area light's triangles.
     pub triangle: Option<usize>,
-    /// Emitted flux per channel (W).
+    /// Flux per channel (W) the photon budget is split by: the emitted flux, or for a distant
+    /// light with portals its flux through them over the share of photons sent that way.
     pub power: Vec3,
 }
 
