@@ -58,6 +58,17 @@ fn settings(guide: bool, passes: u32) -> RenderSettings {
     }
 }
 
+/// The mean of the path tracer's image at 16×16, 2048 spp.
+fn path_mean(scene: &Scene) -> f64 {
+    let path = RenderSettings {
+        integrator: Some(IntegratorKind::Path),
+        spp: Some(2048),
+        seed: Some(1),
+        ..Default::default()
+    };
+    render_checked(scene, &path, 16).film.mean()
+}
+
 /// Seen photons over emitted photons of the render's indirect map.
 fn efficiency(out: &photonmap::integrator::RenderOutput) -> f64 {
     out.stats.photons["indirect"].efficiency
@@ -76,13 +87,7 @@ fn guided_photons_reach_the_room_and_keep_the_image() {
     // The image keeps its value: the mean agrees with the path tracer's (measured: 0.0635 and
     // 0.0630 over 200 passes at seeds 1 and 2, path tracer 0.0629 at 8192 spp; unguided sppm,
     // its photons sparse in the room, stays 3 % low after 96 passes).
-    let path = RenderSettings {
-        integrator: Some(IntegratorKind::Path),
-        spp: Some(2048),
-        seed: Some(1),
-        ..Default::default()
-    };
-    let (mg, mp) = (guided.film.mean(), render_checked(&scene, &path, 16).film.mean());
+    let (mg, mp) = (guided.film.mean(), path_mean(&scene));
     assert!((mg / mp - 1.0).abs() < 0.02, "mean guided {mg} vs path tracer {mp}");
 }
 
@@ -123,13 +128,7 @@ fn portal_photons_reach_the_room_and_keep_the_image() {
     // The portal stratum alone would make it about 0.5 a photon.
     let (eg, ep) = (efficiency(&portal), efficiency(&plain));
     assert!(eg > 30.0 * ep, "efficiency with the portal {eg} vs without {ep}");
-    let path = RenderSettings {
-        integrator: Some(IntegratorKind::Path),
-        spp: Some(2048),
-        seed: Some(1),
-        ..Default::default()
-    };
-    let (mg, mp) = (portal.film.mean(), render_checked(&scene, &path, 16).film.mean());
+    let (mg, mp) = (portal.film.mean(), path_mean(&scene));
     assert!((mg / mp - 1.0).abs() < 0.02, "mean with the portal {mg} vs path tracer {mp}");
 }
 

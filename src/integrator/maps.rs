@@ -12,7 +12,7 @@ use crate::photon::guide::{
 };
 use crate::photon::irradiance::{self, SitePoint};
 use crate::photon::map::{GatherParams, MapColor, PhotonMap, PhotonMaps};
-use crate::photon::portal::PortalSet;
+use crate::photon::portal::{Outside, PortalSet};
 use crate::photon::trace::{self, Pass, PassSpec, Portals, Target};
 use crate::sampling::derive_seed;
 use crate::scene::Scene;
@@ -142,8 +142,8 @@ impl MapStages<'_> {
             stats.skip("photons.indirect", why);
             return (Vec::new(), Vec::new());
         }
-        let set = analysis.portals.get_or_init(|| self.portal_set(frame, seed, stats));
         let outside = crate::integrator::path::Outside { frame, max_depth: p.max_bounces };
+        let set = analysis.portals.get_or_init(|| self.portal_set(frame, &outside, seed, stats));
         let portals = (!set.is_empty()).then_some(Portals { set, outside: &outside });
         let guide = analysis.guide.get_or_init(|| self.guide(frame, portals, seed, stats));
         progress.start("indirect photons", p.photons);
@@ -180,19 +180,22 @@ impl MapStages<'_> {
         (drop_empty(stats, "indirect", maps), sites)
     }
 
-    /// The region the camera sees and, unless `--photon-guide false` or the photons reach it
-    /// well enough already, the guided emission learnt from a pilot (a stage of its own).
     /// The scene's portals (none with `--portals false`) with their incoming flux estimated
-    /// (stage `photons.portals`).
-    fn portal_set<A: Accel>(&self, frame: &Frame<'_, A>, seed: u64, stats: &mut Stats) -> PortalSet {
+    /// with `outside` (stage `photons.portals`).
+    fn portal_set<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        outside: &dyn Outside,
+        seed: u64,
+        stats: &mut Stats,
+    ) -> PortalSet {
         let portals = frame.lights.portals();
         if portals.is_empty() {
             return PortalSet::default();
         }
-        let outside = crate::integrator::path::Outside { frame, max_depth: self.passes.max_bounces };
         let eye = frame.scene.camera.eye;
         let (set, reason) = stats.run("photons.portals", "", |stats| {
-            let (set, rays) = PortalSet::new(portals, eye, &outside, derive_seed(seed, 0x9077, 0));
+            let (set, rays) = PortalSet::new(portals, eye, outside, derive_seed(seed, 0x9077, 0));
             stats.rays.photon += rays;
             let flux: f32 = set.powers().iter().map(|&p| crate::light::luminance(p)).sum();
             let reason = format!(
@@ -207,6 +210,8 @@ impl MapStages<'_> {
         set
     }
 
+    /// The region the camera sees and, unless `--photon-guide false` or the photons reach it
+    /// well enough already, the guided emission learnt from a pilot (a stage of its own).
     fn guide<A: Accel>(
         &self,
         frame: &Frame<'_, A>,

@@ -4,8 +4,8 @@
 //! Its flux into the scene is `E pi R^2` for the disk of radius `R` perpendicular to the
 //! direction that covers the scene's bounding sphere (centre `c`, radius `R`); photons start
 //! uniformly on that disk, moved back outside the sphere. With portals (`[[portal]]`, see
-//! [`super::portal`]) photons start only on lines through them, and the flux is `E` times their
-//! projected area. Call [`DistantLight::preprocess`] with the scene bounds and portals before
+//! [`super::portal`]) half the photons start on lines through them and the rest on the disk
+//! outside them; the flux does not change. Call [`DistantLight::preprocess`] with the scene bounds and portals before
 //! asking for power or photons.
 
 use super::portal::{Portal, Projected};

@@ -24,7 +24,7 @@
 //!   that each reach the camera's view rarely (sunlight off the ground outside, in through the
 //!   window), which the pilot sees too sparsely to place finely, and which, sampled only at
 //!   the uniform share, would come as a few photons of great power. The photon budget is split among
-//!   emitters by the same mixture of seen photons and power. Each photon's power is divided by
+//!   emitters by the same mixture of seen flux and power. Each photon's power is divided by
 //!   the density of its sample, so every estimate keeps its expected value: guiding changes
 //!   the noise, not the answer.
 //!

@@ -22,7 +22,7 @@
 //! * The indirect map holds photons with at least one diffuse bounce behind them.
 //!
 //! * Guided emission ([`super::guide`]): when a pilot of photons found that few reach what the
-//!   camera sees, the budget is split by a mix of seen photons and power, and each emitter's
+//!   camera sees, the budget is split by a mix of seen flux and power, and each emitter's
 //!   position (distant lights) or direction (the others) follows the learnt density; each
 //!   photon's power is divided by its sample's density, so the estimates keep their value.
 //!
