@@ -117,7 +117,7 @@ fn every_case_is_tested() {
 fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
     use photonmap::config::Kernel;
     use photonmap::geometry::Vec3;
-    use photonmap::photon::irradiance::{pick_sites, PrecomputedIrradiance};
+    use photonmap::photon::irradiance::{pick_sites, LookupScratch, PrecomputedIrradiance};
     use photonmap::photon::map::{GatherParams, MapColor, PhotonHit, PhotonMap};
     let estimate = |k: f32| {
         let n = 100;
@@ -140,7 +140,7 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
         let x = Vec3::new(0.5, 0.0, 0.5);
         let mut scratch = Vec::new();
         let e = map.irradiance(x, Vec3::Y, &params, &mut scratch);
-        let site = cache.lookup(x, Vec3::Y, &mut scratch).expect("a site");
+        let site = cache.lookup(x, Vec3::Y, &mut LookupScratch::default()).expect("a site");
         (e, site.indirect, site.direct)
     };
     let (e1, c1, d1) = estimate(1.0);

@@ -16,7 +16,7 @@ use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material};
-use crate::photon::irradiance::{Irradiance, PrecomputedIrradiance, SitePoint};
+use crate::photon::irradiance::{Irradiance, LookupScratch, PrecomputedIrradiance, SitePoint};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use crate::sampling::derive_seed;
@@ -160,6 +160,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
 struct Scratch {
     batch: CameraBatch,
     neighbors: Vec<Neighbor>,
+    sites: LookupScratch,
 }
 
 /// What the camera pass of one pass reads.
@@ -253,7 +254,7 @@ impl<A: Accel> Shading<'_, '_, A> {
             return None;
         }
         c.queries += 1;
-        let e = self.irradiance.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.neighbors)?;
+        let e = self.irradiance.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.sites)?;
         let f = kd * std::f32::consts::FRAC_1_PI;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }

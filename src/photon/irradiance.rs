@@ -59,6 +59,15 @@ pub struct PrecomputedIrradiance {
     scale: f32,
 }
 
+/// A thread's scratch space for [`PrecomputedIrradiance::lookup`]. It remembers the last site
+/// found, which starts the next search (a camera pixel's samples, looked up one after the other,
+/// mostly land by the same site): the answers do not depend on it, only the time.
+#[derive(Debug, Default)]
+pub struct LookupScratch {
+    rejected: Vec<Neighbor>,
+    last: Option<u32>,
+}
+
 /// A place where irradiance is precomputed: a photon's position, its error bound and the
 /// normal on the side it arrived from.
 #[derive(Clone, Copy, Debug)]
@@ -136,17 +145,13 @@ impl PrecomputedIrradiance {
     /// Irradiance at `x` on the side of unit normal `ns`, from the nearest site whose normal
     /// agrees; `None` if no site is near enough.
     #[inline]
-    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut Vec<Neighbor>) -> Option<Irradiance> {
-        self.tree.knn(x, CANDIDATES, self.max_radius, scratch);
-        let mut best: Option<(f32, &Site)> = None;
-        for nb in scratch.iter() {
-            let s = self.tree.get(nb.index);
-            if pack::decode_dir_oct(s.normal).dot(ns) >= NORMAL_COS && best.is_none_or(|(d, _)| nb.dist2 < d)
-            {
-                best = Some((nb.dist2, s));
-            }
-        }
-        best.map(|(_, s)| Irradiance {
+    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Irradiance> {
+        let matches = |s: &Site| pack::decode_dir_oct(s.normal).dot(ns) >= NORMAL_COS;
+        let (hint, rejected) = (scratch.last, &mut scratch.rejected);
+        let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, matches, hint, rejected);
+        scratch.last = best.map(|b| b.index);
+        let s = self.tree.get(best?.index);
+        Some(Irradiance {
             direct: pack::rgb9e5_decode(s.direct) * self.scale,
             indirect: pack::rgb9e5_decode(s.indirect) * self.scale,
             caustic: pack::rgb9e5_decode(s.caustic) * self.scale,
@@ -215,7 +220,7 @@ mod tests {
             PrecomputedIrradiance::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
                 Vec3::X
             });
-        let mut scratch = Vec::new();
+        let mut scratch = LookupScratch::default();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
         let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
         assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");

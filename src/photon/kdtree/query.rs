@@ -117,69 +117,69 @@ impl<T: KdPoint> KdTree<T> {
         out: &mut Vec<Neighbor>,
     ) {
         out.clear();
-        if k == 0 || self.items.is_empty() || max_radius.is_nan() || max_radius < 0.0 {
+        if k == 0 || max_radius.is_nan() || max_radius < 0.0 {
             return;
+        }
+        let limit = inclusive_limit(max_radius * max_radius);
+        self.descend(p, limit, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+    }
+
+    /// The nearest item that `accept` takes among the `k` items nearest to `p` within
+    /// `max_radius`: what [`KdTree::knn`] followed by a scan of its results for the nearest
+    /// accepted one returns (but for ties at equal distances), at about the cost of a nearest-
+    /// neighbour search where most items are accepted: the search radius shrinks to the first
+    /// accepted item found. `hint`, the index of an item likely to be near `p` (the answer to
+    /// the previous, nearby query), starts the search at its distance if `accept` takes it:
+    /// the answer is the same, found sooner. `rejected` is scratch space (it holds the nearest
+    /// rejected items).
+    #[inline]
+    pub fn nearest_among<A: Fn(&T) -> bool>(
+        &self,
+        p: Vec3,
+        k: usize,
+        max_radius: f32,
+        accept: A,
+        hint: Option<u32>,
+        rejected: &mut Vec<Neighbor>,
+    ) -> Option<Neighbor> {
+        rejected.clear();
+        if k == 0 || max_radius.is_nan() || max_radius < 0.0 {
+            return None;
         }
         let items = &self.items[..];
         let mut limit = inclusive_limit(max_radius * max_radius);
-        let mut stack = [Frame::default(); STACK_SIZE];
-        let mut sp = 0usize;
-        let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
-        'walk: loop {
-            let n = hi - lo;
-            if n <= LEAF_SIZE {
-                for (i, it) in items[lo..hi].iter().enumerate() {
-                    let d2 = dist2(it.position() - p);
-                    if d2 < limit {
-                        heap_insert(out, k, lo + i, d2, &mut limit);
-                    }
-                }
-            } else {
-                let mid = lo + n / 2;
-                let s = items[mid].position();
-                let d2 = dist2(s - p);
-                let code = self.code(id);
-                if code == CODE_DEGENERATE {
-                    // Every item of lo..hi is at `s`: insert until the heap is full of them.
-                    let mut i = lo;
-                    while i < hi && d2 < limit {
-                        heap_insert(out, k, i, d2, &mut limit);
-                        i += 1;
-                    }
-                } else {
-                    if d2 < limit {
-                        heap_insert(out, k, mid, d2, &mut limit);
-                    }
-                    let diff = p[code as usize] - s[code as usize];
-                    let plane2 = diff * diff;
-                    let (l, r) = (2 * id + 1, 2 * id + 2);
-                    let (near, far) = if diff < 0.0 {
-                        ((lo, mid, l), (mid + 1, hi, r))
-                    } else {
-                        ((mid + 1, hi, r), (lo, mid, l))
-                    };
-                    if plane2 < limit {
-                        stack[sp] =
-                            Frame { lo: far.0 as u32, hi: far.1 as u32, id: far.2 as u32, d2: plane2 };
-                        sp += 1;
-                    }
-                    (lo, hi, id) = near;
-                    continue 'walk;
-                }
-            }
-            // Pop the next far subtree that the (possibly shrunk) radius still reaches.
-            loop {
-                if sp == 0 {
-                    return;
-                }
-                sp -= 1;
-                let f = stack[sp];
-                if f.d2 < limit {
-                    (lo, hi, id) = (f.lo as usize, f.hi as usize, f.id as usize);
-                    continue 'walk;
-                }
+        let mut best: Option<Neighbor> = None;
+        if let Some(h) = hint.filter(|&h| (h as usize) < items.len() && accept(&items[h as usize])) {
+            let d2 = (items[h as usize].position() - p).length_squared();
+            if d2 < limit {
+                // Items at the hint's own distance are still visited (ties, as in `knn`).
+                best = Some(Neighbor { index: h, dist2: d2 });
+                limit = inclusive_limit(d2);
             }
         }
+        self.descend(
+            p,
+            limit,
+            |d: Vec3| d.length_squared(),
+            |index, d2, limit| {
+                if accept(&items[index]) {
+                    // `d2 < limit` and the limit never exceeds the best: a nearer item.
+                    best = Some(Neighbor { index: index as u32, dist2: d2 });
+                    *limit = d2;
+                } else {
+                    // Once `k` rejected items are nearer than some distance, nothing beyond it is
+                    // among the `k` nearest.
+                    let mut bound = *limit;
+                    heap_insert(rejected, k, index, d2, &mut bound);
+                    if rejected.len() == k {
+                        *limit = limit.min(bound);
+                    }
+                }
+            },
+        );
+        // An item accepted early may have been outnumbered by `k` rejected ones found later.
+        let outnumbered = |b: &Neighbor| rejected.len() == k && rejected[0].dist2 < b.dist2;
+        best.filter(|b| !outnumbered(b))
     }
 
     /// All items within distance `radius` of `p` (inclusive), in unspecified order; `out` is
@@ -224,11 +224,30 @@ impl<T: KdPoint> KdTree<T> {
         dist2: F,
         mut f: G,
     ) {
-        if self.items.is_empty() || limit.is_nan() || limit <= 0.0 {
+        if limit.is_nan() || limit <= 0.0 {
             return;
         }
+        self.descend(p, limit, dist2, |index, d2, _| f(index as u32, d2));
+    }
+
+    /// The traversal every query shares: calls `visit(index, d2, &mut limit)` for every item
+    /// whose metric `d2 = dist2(item - p)` is strictly below the running `limit`, nearer
+    /// subtrees first; `visit` may shrink the limit (a k-NN heap that filled up), and subtrees
+    /// the shrunk limit no longer reaches are skipped. The requirement of
+    /// [`KdTree::knn_with`] on the metric applies.
+    #[inline(always)]
+    fn descend<F: Fn(Vec3) -> f32, V: FnMut(usize, f32, &mut f32)>(
+        &self,
+        p: Vec3,
+        mut limit: f32,
+        dist2: F,
+        mut visit: V,
+    ) {
         let items = &self.items[..];
-        let mut stack = [(0u32, 0u32, 0u32); STACK_SIZE];
+        if items.is_empty() {
+            return;
+        }
+        let mut stack = [Frame::default(); STACK_SIZE];
         let mut sp = 0usize;
         let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
         'walk: loop {
@@ -237,7 +256,7 @@ impl<T: KdPoint> KdTree<T> {
                 for (i, it) in items[lo..hi].iter().enumerate() {
                     let d2 = dist2(it.position() - p);
                     if d2 < limit {
-                        f((lo + i) as u32, d2);
+                        visit(lo + i, d2, &mut limit);
                     }
                 }
             } else {
@@ -246,34 +265,45 @@ impl<T: KdPoint> KdTree<T> {
                 let d2 = dist2(s - p);
                 let code = self.code(id);
                 if code == CODE_DEGENERATE {
-                    if d2 < limit {
-                        (lo..hi).for_each(|i| f(i as u32, d2));
+                    // Every item of lo..hi is at `s`: one point with a multiplicity.
+                    let mut i = lo;
+                    while i < hi && d2 < limit {
+                        visit(i, d2, &mut limit);
+                        i += 1;
                     }
                 } else {
                     if d2 < limit {
-                        f(mid as u32, d2);
+                        visit(mid, d2, &mut limit);
                     }
                     let diff = p[code as usize] - s[code as usize];
+                    let plane2 = diff * diff;
                     let (l, r) = (2 * id + 1, 2 * id + 2);
                     let (near, far) = if diff < 0.0 {
                         ((lo, mid, l), (mid + 1, hi, r))
                     } else {
                         ((mid + 1, hi, r), (lo, mid, l))
                     };
-                    if diff * diff < limit {
-                        stack[sp] = (far.0 as u32, far.1 as u32, far.2 as u32);
+                    if plane2 < limit {
+                        stack[sp] =
+                            Frame { lo: far.0 as u32, hi: far.1 as u32, id: far.2 as u32, d2: plane2 };
                         sp += 1;
                     }
                     (lo, hi, id) = near;
                     continue 'walk;
                 }
             }
-            if sp == 0 {
-                return;
+            // Pop the next far subtree that the (possibly shrunk) limit still reaches.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let f = stack[sp];
+                if f.d2 < limit {
+                    (lo, hi, id) = (f.lo as usize, f.hi as usize, f.id as usize);
+                    continue 'walk;
+                }
             }
-            sp -= 1;
-            let (a, b, c) = stack[sp];
-            (lo, hi, id) = (a as usize, b as usize, c as usize);
         }
     }
 }
@@ -297,6 +327,40 @@ mod tests {
         got.sort_by(f32::total_cmp);
         assert_eq!(got, vec![0.5, 1.0, 2.0]);
         assert_eq!(limit, 2.0);
+    }
+
+    /// `nearest_among` answers what `knn` and a scan of its results for the nearest accepted
+    /// item answer, with and without hints (good, bad and rejected ones), on clustered points.
+    #[test]
+    fn nearest_among_matches_knn_and_a_scan() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(7);
+        let pts: Vec<Vec3> =
+            (0..5000).map(|_| Vec3::new(rng.gen(), rng.gen::<f32>() * 0.1, rng.gen())).collect();
+        let t = KdTree::build(pts);
+        // Accept about two items in three, by position (so the same item always answers alike).
+        let accept = |q: &Vec3| (q.x * 1000.0) as u32 % 3 != 0;
+        let (mut out, mut rejected) = (Vec::new(), Vec::new());
+        let mut last = None;
+        let mut answered = 0;
+        for i in 0..2000 {
+            let p = Vec3::new(rng.gen(), rng.gen::<f32>() * 0.1, rng.gen());
+            let (k, radius) = ([1, 2, 8][i % 3], [0.02, 0.05, 1.0][i % 3]);
+            t.knn(p, k, radius, &mut out);
+            let expected = out
+                .iter()
+                .filter(|nb| accept(t.get(nb.index)))
+                .min_by(|a, b| a.dist2.total_cmp(&b.dist2))
+                .map(|nb| nb.index);
+            let hints = [None, last, Some(rng.gen_range(0..5000)), Some(u32::MAX)];
+            for hint in hints {
+                let got = t.nearest_among(p, k, radius, accept, hint, &mut rejected);
+                assert_eq!(got.map(|nb| nb.index), expected, "query {i}, hint {hint:?}");
+            }
+            last = expected.or(last);
+            answered += expected.is_some() as u32;
+        }
+        assert!(answered > 500 && answered < 1990, "{answered}");
     }
 
     #[test]
