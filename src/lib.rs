@@ -16,6 +16,7 @@
 //! * [`photon`]: the photon pass, the photon maps and their kd-tree, precomputed irradiance;
 //! * [`integrator`]: two-pass photon mapping, progressive photon mapping, the path tracer, and
 //!   the pass loop they share;
+//! * [`batch`]: many views and frames rendered from one set of photon maps (frame lists);
 //! * [`tools`]: what measures the renderer (agreement of backends, stress suite, error against
 //!   time, speed, the lecture's Monte Carlo examples).
 //!
@@ -25,6 +26,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod batch;
 pub mod choice;
 pub mod config;
 pub mod film;

@@ -391,6 +391,15 @@ fn info(path: &std::path::Path) -> Result<()> {
         scene.camera.height,
         scene.camera.eye.to_array()
     );
+    let cameras: Vec<String> = scene
+        .cameras
+        .iter()
+        .map(|c| {
+            let frames = c.frames().map_or("still".into(), |f| format!("frames {}..={}", f.start(), f.end()));
+            format!("{} ({}x{}, {frames})", c.name, c.width, c.height)
+        })
+        .collect();
+    println!("cameras    {}", cameras.join(", "));
     let count = scene.triangles_per_material();
     for ((name, m), count) in scene.material_names.iter().zip(&scene.materials).zip(count) {
         println!("material   {name}: {m:?} ({count} triangles)");

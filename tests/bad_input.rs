@@ -81,6 +81,22 @@ fn cases() -> Vec<Case> {
             )],
             ..case("portal not a parallelogram", &["cornell.toml", "portal[0].corners", "parallelogram"])
         },
+        Case {
+            edits: &[(
+                "cornell.toml",
+                "[camera]",
+                "[[camera]]\nname = \"front\"\neye = [0.278, 0.273, -0.9]\ntarget = [0.278, 0.273, 0.0]\n\
+                 up = [0.0, 1.0, 0.0]\nvfov_deg = 40\nwidth = 16\nheight = 16\n\n[[camera]]\nname = \"front\"",
+            )],
+            ..case(
+                "two cameras of one name",
+                &["cornell.toml", "field `camera[1].name`", "duplicate camera name \"front\""],
+            )
+        },
+        Case {
+            edits: &[("cornell.toml", "height = 256", "height = 256\n\n[[camera.key]]\nframe = 3")],
+            ..case("an animation of one key", &["cornell.toml", "field `camera.key`", "needs at least 2"])
+        },
         Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
         Case {
             flags: &[("--width", "1000000")],
@@ -252,4 +268,49 @@ fn the_unaltered_scene_renders() {
     assert!(dir.path().join("out.exr").is_file());
     let names: Vec<String> = snapshot(dir.path()).into_keys().collect();
     assert_eq!(names, ["cornell.mtl", "cornell.obj", "cornell.toml", "out.exr"], "stray files");
+}
+
+/// `photonmap info` lists the scene's cameras, and refuses (as `render` does) a camera whose
+/// animation passes through a degenerate view, naming the field and the frame.
+#[test]
+fn info_lists_the_cameras_and_refuses_a_degenerate_animation() {
+    let keys =
+        "height = 256\n\n[[camera.key]]\nframe = 0\n\n[[camera.key]]\nframe = 48\neye = [0.3, 0.3, -0.7]\n\n\
+                [[camera.key]]\nframe = 96\n";
+    let turntable = "\n[[camera]]\nname = \"orbit\"\neye = [0.278, 0.273, -0.8]\ntarget = [0.278, 0.273, 0.28]\n\
+                     up = [0.0, 1.0, 0.0]\nvfov_deg = 40\nwidth = 64\nheight = 48\nturntable = { frames = 90 }\n\n[[mesh]]";
+    let dir = setup(&case("two cameras", &[]));
+    let toml = TOML.replacen("[camera]", "[[camera]]\nname = \"front\"", 1).replacen("height = 256", keys, 1);
+    fs::write(dir.path().join("cornell.toml"), toml.replacen("\n[[mesh]]", turntable, 1)).unwrap();
+    let out = info(dir.path());
+    assert_eq!(out.status.code(), Some(0), "stderr: {}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("cameras    front (256x256, frames 0..=96), orbit (64x48, frames 0..=89)"),
+        "{stdout}"
+    );
+
+    // Eye and target swap places between frames 0 and 2, meeting at frame 1.
+    let swap =
+        "height = 256\n\n[[camera.key]]\nframe = 0\neye = [0.1, 0.273, 0.0]\ntarget = [0.5, 0.273, 0.0]\n\n\
+                [[camera.key]]\nframe = 2\neye = [0.5, 0.273, 0.0]\ntarget = [0.1, 0.273, 0.0]\n";
+    fs::write(dir.path().join("cornell.toml"), TOML.replacen("height = 256", swap, 1)).unwrap();
+    let out = info(dir.path());
+    let run = Run { code: out.status.code(), stderr: String::from_utf8_lossy(&out.stderr).into_owned() };
+    let bad = case(
+        "degenerate frame",
+        &["cornell.toml", "field `camera.key`", "frame 1: the interpolated view is degenerate"],
+    );
+    check(&bad, &run).unwrap();
+}
+
+/// Runs `photonmap info cornell.toml` in `dir`.
+fn info(dir: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_photonmap"))
+        .current_dir(dir)
+        .args(["info", "cornell.toml"])
+        .stdin(Stdio::null())
+        .env_remove("RUST_BACKTRACE")
+        .output()
+        .expect("photonmap could not be started")
 }

@@ -2,15 +2,18 @@
 
 use super::SceneError;
 use crate::config::RenderSettings;
+use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+use serde::de::{Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::Deserialize;
 use std::collections::BTreeMap;
+use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// The scene file as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    pub camera: CameraEntry,
+    pub camera: CameraEntries,
     #[serde(default, rename = "mesh")]
     pub meshes: Vec<MeshEntry>,
     #[serde(default)]
@@ -23,15 +26,76 @@ pub struct SceneFile {
     pub render: RenderSettings,
 }
 
+/// `camera`: one `[camera]` table or an array of `[[camera]]` tables.
+///
+/// Deserialised by hand rather than as an untagged enum: an untagged enum reports only "data
+/// did not match any variant", where this keeps the table's own error ("unknown field
+/// `focal_length`") and its line.
+#[derive(Debug)]
+pub enum CameraEntries {
+    One(CameraEntry),
+    Many(Vec<CameraEntry>),
+}
+
+impl<'de> Deserialize<'de> for CameraEntries {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Either;
+        impl<'de> Visitor<'de> for Either {
+            type Value = CameraEntries;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a [camera] table or [[camera]] tables")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<CameraEntries, A::Error> {
+                CameraEntry::deserialize(MapAccessDeserializer::new(map)).map(CameraEntries::One)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<CameraEntries, A::Error> {
+                Vec::deserialize(SeqAccessDeserializer::new(seq)).map(CameraEntries::Many)
+            }
+        }
+        deserializer.deserialize_any(Either)
+    }
+}
+
+/// `[camera]` or one of `[[camera]]`: a view, optionally animated by `[[camera.key]]`s or a
+/// `turntable`.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraEntry {
+    /// Required in a `[[camera]]` array; a single `[camera]` is named `camera` by default.
+    pub name: Option<String>,
     pub eye: [f32; 3],
     pub target: [f32; 3],
     pub up: [f32; 3],
     pub vfov_deg: f32,
     pub width: u32,
     pub height: u32,
+    #[serde(default, rename = "key")]
+    pub keys: Vec<KeyEntry>,
+    pub turntable: Option<TurntableEntry>,
+}
+
+/// `[[camera.key]]`: the view at `frame`; fields left out take the camera's own values.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KeyEntry {
+    pub frame: u32,
+    pub eye: Option<[f32; 3]>,
+    pub target: Option<[f32; 3]>,
+    pub up: Option<[f32; 3]>,
+    pub vfov_deg: Option<f32>,
+}
+
+/// `turntable = { frames = N, center = [x, y, z], axis = [0, 1, 0], degrees = 360.0 }`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TurntableEntry {
+    pub frames: u32,
+    /// The camera's target by default.
+    pub center: Option<[f32; 3]>,
+    /// +Y by default.
+    pub axis: Option<[f32; 3]>,
+    /// 360 by default.
+    pub degrees: Option<f32>,
 }
 
 /// A scale given as one number or per axis.

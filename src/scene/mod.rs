@@ -5,16 +5,19 @@
 //! Loading validates everything up front and reports the file and the line or field at fault.
 
 mod camera;
+mod cameras;
 mod error;
 mod file;
 mod obj;
 
-pub use camera::Camera;
+pub use camera::{Camera, CameraKey, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
-pub use file::{LightEntry, MaterialEntry, MaterialKind, SceneFile};
+pub use file::{
+    CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
+};
 pub use obj::MtlMaterial;
 
-use crate::config::{RenderSettings, MAX_IMAGE_SIDE};
+use crate::config::RenderSettings;
 use crate::geometry::{Aabb, TriangleMesh};
 use crate::light::{LightDesc, Portal};
 use crate::material::Material;
@@ -27,7 +30,10 @@ use std::path::{Path, PathBuf};
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub path: PathBuf,
+    /// The first view of `cameras[0]` (its first frame, or any frame if it is still).
     pub camera: Camera,
+    /// Every camera of the scene file, in file order (at least one).
+    pub cameras: Vec<SceneCamera>,
     pub mesh: TriangleMesh,
     /// Material index of each triangle.
     pub tri_material: Vec<u32>,
@@ -51,7 +57,8 @@ impl Scene {
     /// Builds a scene from TOML `text`; paths inside are relative to `path`'s directory.
     pub fn from_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
         let file = SceneFile::parse(path, text)?;
-        let camera = camera(path, &file.camera)?;
+        let cameras = cameras::cameras(path, &file.camera)?;
+        let camera = cameras[0].view(cameras[0].frames().map_or(0, |f| *f.start()));
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
         }
@@ -92,10 +99,11 @@ impl Scene {
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
         let portals =
             file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
-        validate_render(path, &file.render, &camera)?;
+        validate_render(path, &file.render, &cameras)?;
         Ok(Scene {
             path: path.to_owned(),
             camera,
+            cameras,
             mesh,
             tri_material,
             materials,
@@ -132,6 +140,7 @@ impl Scene {
             *p -= c;
         }
         s.camera.eye -= c;
+        s.cameras = s.cameras.iter().map(|k| k.translated(c)).collect();
         for l in &mut s.lights {
             match l {
                 LightDesc::Point { position, .. } | LightDesc::Spot { position, .. } => *position -= c,
@@ -159,33 +168,6 @@ impl Scene {
         }
         count
     }
-}
-
-fn camera(path: &Path, c: &file::CameraEntry) -> Result<Camera, SceneError> {
-    let eye = finite3(path, "camera.eye", c.eye)?;
-    let target = finite3(path, "camera.target", c.target)?;
-    let up = finite3(path, "camera.up", c.up)?;
-    // A field of view so small that its tangent rounds to 0 would give every pixel one ray.
-    let tan_half = (0.5 * c.vfov_deg.to_radians()).tan();
-    if !(c.vfov_deg > 0.0 && c.vfov_deg < 180.0 && tan_half > 0.0 && tan_half.is_finite()) {
-        return Err(SceneError::field(
-            path,
-            "camera.vfov_deg",
-            format!("{} is not in (0, 180), or too small to be used", c.vfov_deg),
-        ));
-    }
-    for (name, v) in [("camera.width", c.width), ("camera.height", c.height)] {
-        if v == 0 || v > MAX_IMAGE_SIDE {
-            return Err(SceneError::field(path, name, format!("{v} is not in 1..={MAX_IMAGE_SIDE}")));
-        }
-    }
-    Camera::look_at(eye, target, up, c.vfov_deg, c.width, c.height).ok_or_else(|| {
-        SceneError::field(
-            path,
-            "camera",
-            "degenerate view: eye equals target or up is parallel to the view direction",
-        )
-    })
 }
 
 fn transform(
@@ -372,12 +354,19 @@ fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneE
 }
 
 /// Refuses `[render]` settings that cannot be honoured, before any work is done: the table is
-/// resolved at the camera's size by the same checks every render runs.
-fn validate_render(path: &Path, r: &RenderSettings, camera: &Camera) -> Result<(), SceneError> {
-    match r.resolve(camera.width, camera.height) {
-        Ok(_) => Ok(()),
-        Err(e) => Err(SceneError::field(path, format!("render.{}", e.field), e.message)),
+/// resolved at each camera's size by the same checks every render runs.
+fn validate_render(path: &Path, r: &RenderSettings, cameras: &[SceneCamera]) -> Result<(), SceneError> {
+    for (i, c) in cameras.iter().enumerate() {
+        if let Err(e) = r.resolve(c.width, c.height) {
+            let at = if i == 0 {
+                String::new()
+            } else {
+                format!(" (at camera[{i}] {:?}'s {}x{})", c.name, c.width, c.height)
+            };
+            return Err(SceneError::field(path, format!("render.{}", e.field), format!("{}{at}", e.message)));
+        }
     }
+    Ok(())
 }
 
 #[cfg(test)]

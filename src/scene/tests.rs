@@ -220,3 +220,183 @@ fn triangles_are_counted_per_material_even_when_two_are_equal() {
         assert_eq!(n, s.tri_material.iter().filter(|&&m| m as usize == i).count());
     }
 }
+
+/// Two named cameras: `front` keyed (frames 10 to 40, keys leaving fields out), `orbit` a
+/// turntable at its own resolution.
+const TWO_CAMERAS: &str = r#"
+[[camera]]
+name = "front"
+eye = [0, 0, -2]
+target = [0.5, 0.5, 0]
+up = [0, 1, 0]
+vfov_deg = 40
+width = 8
+height = 6
+
+[[camera.key]]
+frame = 10
+
+[[camera.key]]
+frame = 25
+eye = [1, 0.5, -2]
+vfov_deg = 30
+
+[[camera.key]]
+frame = 40
+eye = [0.5, 1, -1.5]
+up = [0.1, 1, 0]
+
+[[camera]]
+name = "orbit.v2"
+eye = [0.5, 0.5, -3]
+target = [0.5, 0.5, 0]
+up = [0, 1, 0]
+vfov_deg = 35
+width = 4
+height = 4
+turntable = { frames = 120, degrees = 90.0 }
+"#;
+
+fn load_cameras(cameras: &str) -> Result<Scene, SceneError> {
+    let toml = format!("{cameras}\n[[mesh]]\nobj = \"q.obj\"\n");
+    load_in_tmp(&[("scene.toml", &toml), ("q.obj", QUAD), ("q.mtl", MTL)])
+}
+
+#[test]
+fn a_single_camera_table_loads_as_before_named_camera() {
+    let s = load_cameras(CAMERA).unwrap();
+    let expected = Camera::look_at(Vec3::new(0.0, 0.0, -2.0), Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap();
+    assert_eq!(s.camera, expected);
+    assert_eq!(s.cameras.len(), 1);
+    let c = &s.cameras[0];
+    assert_eq!((c.name.as_str(), c.width, c.height, c.frames()), ("camera", 8, 8, None));
+    assert_eq!(c.view(0), expected);
+    assert_eq!(c.view(1234), expected);
+    // The single table may be named and keyed too.
+    let keyed = format!(
+        "{CAMERA}name = \"hero\"\n[[camera.key]]\nframe = 0\n[[camera.key]]\nframe = 4\neye = [0, 1, -2]\n"
+    );
+    let s = load_cameras(&keyed).unwrap();
+    assert_eq!((s.cameras[0].name.as_str(), s.cameras[0].frames()), ("hero", Some(0..=4)));
+    assert_eq!(s.camera, expected, "the first frame is the camera's own view");
+}
+
+#[test]
+fn a_camera_array_with_keys_and_a_turntable_loads() {
+    let s = load_cameras(TWO_CAMERAS).unwrap();
+    let names: Vec<&str> = s.cameras.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["front", "orbit.v2"]);
+    let (front, orbit) = (&s.cameras[0], &s.cameras[1]);
+    assert_eq!((front.width, front.height, front.frames()), (8, 6, Some(10..=40)));
+    assert_eq!((orbit.width, orbit.height, orbit.frames()), (4, 4, Some(0..=119)));
+    // `camera` is the first camera at its first frame, which is the table's own view.
+    let own =
+        Camera::look_at(Vec3::new(0.0, 0.0, -2.0), Vec3::new(0.5, 0.5, 0.0), Vec3::Y, 40.0, 8, 6).unwrap();
+    assert_eq!(s.camera, own);
+    assert_eq!(front.view(0), own, "frames before the first key are clamped to it");
+    // Key 25 keeps the camera's target and up and sets its own eye and field of view.
+    let at25 =
+        Camera::look_at(Vec3::new(1.0, 0.5, -2.0), Vec3::new(0.5, 0.5, 0.0), Vec3::Y, 30.0, 8, 6).unwrap();
+    assert_eq!(front.view(25), at25);
+    // The turntable turns about the target (its default centre): 90 degrees over 120 frames,
+    // so frame 60 is 45 degrees round.
+    let half = orbit.view(60);
+    let r = Vec3::new(0.5, 0.5, 0.0) - half.eye;
+    assert!((r.length() - 3.0).abs() < 1e-5 && (r.x - r.z).abs() < 1e-5, "{half:?}");
+}
+
+#[test]
+fn recentring_moves_every_camera() {
+    let far = TWO_CAMERAS.replace("[0.5, 0.5, 0]", "[1000.5, 0.5, 0]").replace("eye = [0", "eye = [1000");
+    let toml = format!("{far}\n[[mesh]]\nobj = \"q.obj\"\ntranslate = [1000, 0, 0]\n");
+    let s = load_in_tmp(&[("scene.toml", &toml), ("q.obj", QUAD), ("q.mtl", MTL)]).unwrap();
+    let moved = s.recentred().expect("the scene is far from the origin");
+    let c = s.bounds().center();
+    for (before, after) in s.cameras.iter().zip(&moved.cameras) {
+        for frame in [0, 10, 17, 40, 60, 119] {
+            let mut expected = before.view(frame);
+            expected.eye -= c;
+            assert_eq!(after.view(frame), expected, "{} frame {frame}", before.name);
+        }
+    }
+    assert_eq!(moved.camera, moved.cameras[0].view(10));
+}
+
+#[test]
+fn bad_cameras_are_refused_naming_the_field() {
+    let front = TWO_CAMERAS;
+    let second_named_front = front.replace("name = \"orbit.v2\"", "name = \"front\"");
+    let cases: Vec<(String, &str)> = vec![
+        (second_named_front, "field `camera[1].name`: duplicate camera name \"front\" (camera[0] has it too)"),
+        (front.replace("name = \"orbit.v2\"\n", ""), "field `camera[1].name`: missing"),
+        (front.replace("\"orbit.v2\"", "\"orbit v2\""), "field `camera[1].name`: \"orbit v2\" is not a camera name"),
+        (front.replace("\"orbit.v2\"", "\"\""), "field `camera[1].name`: \"\" is not a camera name"),
+        (front.replace("\"orbit.v2\"", "\"..\""), "field `camera[1].name`: \"..\" is not a camera name"),
+        (front.replace("\"front\"", "\"a/b\""), "field `camera[0].name`: \"a/b\" is not a camera name"),
+        (format!("{CAMERA}name = \"x y\"\n"), "field `camera.name`"),
+        (front.replace("vfov_deg = 35", "vfov_deg = 180"), "field `camera[1].vfov_deg`: 180 is not in (0, 180)"),
+        (front.replace("width = 4", "width = 0"), "field `camera[1].width`: 0 is not in 1..="),
+        (
+            front.replace("target = [0.5, 0.5, 0]\nup = [0, 1, 0]\nvfov_deg = 35", "target = [0.5, 0.5, -3]\nup = [0, 1, 0]\nvfov_deg = 35"),
+            "field `camera[1]`: degenerate view",
+        ),
+        (
+            format!("{CAMERA}[[camera.key]]\nframe = 3\n"),
+            "field `camera.key`: 1 key given: an animation needs at least 2",
+        ),
+        (
+            front.replace("frame = 40", "frame = 25"),
+            "field `camera[0].key[2].frame`: frame 25 does not come after the previous key's frame 25",
+        ),
+        (
+            front.replace("frame = 25", "frame = 5"),
+            "field `camera[0].key[1].frame`: frame 5 does not come after the previous key's frame 10",
+        ),
+        (
+            front.replace("frame = 40", "frame = 1000011"),
+            "field `camera[0].key`: the animation spans 1000002 frames, more than 1000000",
+        ),
+        (
+            front.replace("turntable = { frames = 120, degrees = 90.0 }", "turntable = { frames = 12 }\n[[camera.key]]\nframe = 0\n[[camera.key]]\nframe = 1"),
+            "field `camera[1].turntable`: the camera has [[camera.key]]s as well",
+        ),
+        (front.replace("frames = 120", "frames = 0"), "field `camera[1].turntable.frames`: a turntable of 0 frames"),
+        (front.replace("frames = 120", "frames = 1000001"), "field `camera[1].turntable.frames`: the animation spans 1000001 frames"),
+        (front.replace("degrees = 90.0", "degrees = nan, axis = [0, 0, 0]"), "field `camera[1].turntable.degrees`: NaN is not finite"),
+        (front.replace("degrees = 90.0", "axis = [0, 0, 0]"), "field `camera[1].turntable.axis`: the turntable's axis [0.0, 0.0, 0.0] is zero"),
+        (front.replace("degrees = 90.0", "center = [inf, 0, 0]"), "field `camera[1].turntable.center`"),
+        (front.replace("vfov_deg = 30", "vfov_deg = -1"), "field `camera[0].key[1].vfov_deg`: -1 is not in (0, 180)"),
+        (front.replace("eye = [1, 0.5, -2]", "eye = [1, nan, -2]"), "field `camera[0].key[1].eye`"),
+        // Eye and target cross at frame 1: the interpolated view there is degenerate.
+        (
+            format!("{CAMERA}[[camera.key]]\nframe = 0\neye = [-1, 0, 0]\ntarget = [1, 0, 0]\n[[camera.key]]\nframe = 2\neye = [1, 0, 0]\ntarget = [-1, 0, 0]\n"),
+            "field `camera.key`: frame 1: the interpolated view is degenerate",
+        ),
+        (front.replace("frame = 25", "frame = 25\nroll = 3"), "unknown field `roll`"),
+        (front.replace("frame = 25", "frame = -25"), "line 15, column 9: invalid value: integer `-25`, expected u32"),
+        (front.replace("frames = 120", "frames = 120, spin = 2"), "unknown field `spin`"),
+        (String::from("camera = []\n"), "field `camera`: an empty array"),
+        (String::from("camera = 3\n"), "a [camera] table or [[camera]] tables"),
+    ];
+    for (toml, expected) in cases {
+        let e = match load_cameras(&toml) {
+            Ok(_) => panic!("expected an error containing `{expected}` from:\n{toml}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(expected), "expected `{expected}` in: {e}");
+        assert!(e.contains("scene.toml: field `") || e.contains("scene.toml: line "), "{e}");
+        assert!(!e.contains('\n'), "{e:?}");
+    }
+}
+
+#[test]
+fn unknown_camera_fields_keep_their_line() {
+    // The hand-written `[camera]`-or-`[[camera]]` deserialiser keeps the table's own error.
+    let e =
+        load_cameras(&CAMERA.replace("width = 8", "width = 8\nfocal_length = 35")).unwrap_err().to_string();
+    assert!(e.contains("line 7") && e.contains("unknown field `focal_length`"), "{e}");
+    let e = load_cameras(&TWO_CAMERAS.replace("width = 4", "width = 4\nfocal_length = 35"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("line 31, column 1") && e.contains("unknown field `focal_length`"), "{e}");
+}

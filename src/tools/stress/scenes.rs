@@ -5,7 +5,7 @@ use crate::config::RenderSettings;
 use crate::geometry::{TriangleMesh, Vec3};
 use crate::light::LightDesc;
 use crate::material::Material;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Scene, SceneCamera};
 use std::path::PathBuf;
 
 /// Which way the faces of a box look.
@@ -89,6 +89,7 @@ impl Builder {
         Scene {
             path: PathBuf::from(format!("stress/{name}")),
             camera,
+            cameras: vec![SceneCamera::still("camera", camera)],
             mesh: self.mesh,
             tri_material: self.tri_material,
             materials: self.materials,
