@@ -68,15 +68,31 @@ pub enum Command {
 pub struct RenderArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
-    /// Output image, float RGB OpenEXR.
+    /// Output image, float RGB OpenEXR. For many images a pattern: {camera}, {frame} and
+    /// {frame:04} (zero-padded) are replaced, e.g. out/{camera}_{frame:04}.exr
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Also write an sRGB PNG preview here (linear radiance clamped at 1).
+    /// Also write an sRGB PNG preview here (linear radiance clamped at 1); a pattern like -o's
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Write a JSON report (stages, photons, rays, timings) here.
+    /// Write a JSON report (stages, photons, rays, timings) here; for many images, one report
+    /// with the batch's totals and every image's own
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Frames to render, as render farms write them: 1-30,40,50-60 (ranges inclusive; A-BxK or
+    /// A-B:K takes every K-th) [default: each camera's animation, or frame 0 of a still camera]
+    #[arg(long, value_name = "LIST")]
+    pub frames: Option<String>,
+    /// Step for the --frames ranges that give none
+    #[arg(long, value_name = "K", default_value_t = 1)]
+    pub frame_step: u32,
+    /// Cameras to render, by name (comma-separated) [default: every camera of the scene]
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    pub cameras: Option<Vec<String>>,
+    /// Skip images whose output already holds that very image, finished (same scene, settings,
+    /// camera and frame, as recorded in its header): a stopped batch goes on where it stopped
+    #[arg(long)]
+    pub resume: bool,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,

@@ -68,13 +68,44 @@ impl Film {
 
     /// Writes float32 RGB OpenEXR atomically.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
+        self.write_exr_with(path, &[])
+    }
+
+    /// Writes float32 RGB OpenEXR atomically, with `meta` as text attributes of the header
+    /// (how the image was made: [`read_exr_meta`](Film::read_exr_meta) reads them back).
+    pub fn write_exr_with(&self, path: &Path, meta: &[(&str, String)]) -> Result<(), ImageError> {
+        use exr::prelude::*;
         atomic_write(path, |tmp| {
-            exr::prelude::write_rgb_file(tmp, self.width, self.height, |x, y| {
+            let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
                 let p = self.get(x, y);
                 (p.x, p.y, p.z)
-            })
-            .map_err(|e| e.to_string())
+            });
+            let mut image = Image::from_channels((self.width, self.height), channels);
+            for (name, value) in meta {
+                image
+                    .layer_data
+                    .attributes
+                    .other
+                    .insert(Text::from(*name), AttributeValue::Text(Text::from(value.as_str())));
+            }
+            image.write().to_file(tmp).map_err(|e| e.to_string())
         })
+    }
+
+    /// The text attributes of an OpenEXR file's header (those [`write_exr_with`](Film::write_exr_with)
+    /// wrote, among others), without reading its pixels.
+    pub fn read_exr_meta(path: &Path) -> Result<std::collections::BTreeMap<String, String>, ImageError> {
+        let meta = exr::meta::MetaData::read_from_file(path, false)
+            .map_err(|e| ImageError::Format { path: path.to_owned(), message: e.to_string() })?;
+        let mut out = std::collections::BTreeMap::new();
+        for header in &meta.headers {
+            for (name, value) in header.shared_attributes.other.iter().chain(&header.own_attributes.other) {
+                if let exr::meta::attribute::AttributeValue::Text(text) = value {
+                    out.insert(name.to_string(), text.to_string());
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// Writes an 8-bit sRGB PNG preview (radiance clamped to [0, 1], sRGB transfer curve)
@@ -171,6 +202,13 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
         f.write_png(&dir.path().join("a.png")).unwrap();
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+        // Text attributes come back as written, and the pixels are unchanged by them.
+        let meta = [("photonmap.frame", "7".to_string()), ("photonmap.camera", "front".to_string())];
+        f.write_exr_with(&path, &meta).unwrap();
+        let read = Film::read_exr_meta(&path).unwrap();
+        assert_eq!(read.get("photonmap.frame").map(String::as_str), Some("7"));
+        assert_eq!(read.get("photonmap.camera").map(String::as_str), Some("front"));
+        assert_eq!(Film::read_exr(&path).unwrap(), f);
     }
 
     #[test]

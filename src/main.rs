@@ -9,6 +9,8 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use cli::{Cli, Command};
 use photonmap::accel::AccelOptions;
+use photonmap::batch;
+use photonmap::frame::{Progress, Quiet};
 use photonmap::integrator;
 use photonmap::scene::Scene;
 use photonmap::stats::Stats;
@@ -84,91 +86,140 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     let mut stats = Stats::default();
     let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| Scene::load(&args.scene))?;
     let settings = scene.render.overridden_by(&args.settings.to_settings());
-    let width = args.width.unwrap_or(scene.camera.width);
-    let height = args.height.unwrap_or(scene.camera.height);
-    let cfg = settings
-        .resolve(width, height)
-        .with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
-    check_output_dirs([Some(&args.output), args.png.as_ref(), args.stats.as_ref()])?;
-    let pool = pool(args.threads)?;
-    let progress = progress::Bars::new(args.quiet);
-    let load = stats.stages.clone();
-    install_interrupt_handler(cfg.is_progressive())?;
-    let checkpoint = |passes: u32, film: &photonmap::film::Film| {
-        let written = film.write_exr(&args.output).and_then(|()| match &args.png {
-            Some(png) => film.write_png(png),
-            None => Ok(()),
-        });
-        if let Err(e) = written {
-            eprintln!("photonmap: warning: checkpoint after {passes} passes not written: {e}");
-        }
+    let frames = match &args.frames {
+        Some(list) => Some(
+            batch::frames::parse_frames(list, args.frame_step)
+                .map_err(|e| anyhow::anyhow!("--frames {list}: {e}"))?,
+        ),
+        None => None,
     };
+    let selection = batch::plan::Selection { cameras: args.cameras.as_deref(), frames: frames.as_deref() };
+    let jobs = batch::plan::plan(&scene, selection, &args.output, args.png.as_deref())
+        .map_err(anyhow::Error::msg)?;
+    let size = |c: usize| {
+        let cam = &scene.cameras[c];
+        (args.width.unwrap_or(cam.width), args.height.unwrap_or(cam.height))
+    };
+    let cfgs = jobs
+        .iter()
+        .map(|job| {
+            let (w, h) = size(job.camera);
+            settings
+                .resolve(w, h)
+                .with_context(|| format!("{}: invalid render settings", args.scene.display()))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let outputs = jobs.iter().flat_map(|j| std::iter::once(&j.output).chain(&j.png));
+    check_output_dirs(outputs.chain(&args.stats))?;
+    let pool = pool(args.threads)?;
+    let bars = progress::Bars::new(args.quiet);
+    // One bar: over the images of a batch, or over the stages of one image.
+    let (outer, inner): (&dyn Progress, &dyn Progress) =
+        if jobs.len() > 1 { (&bars, &Quiet) } else { (&Quiet, &bars) };
+    install_interrupt_handler(cfgs.iter().any(|c| c.is_progressive()))?;
     if args.checkpoint_every == Some(0) {
         bail!("--checkpoint-every 0: must be at least 1");
     }
-    let control = integrator::Control {
+    let options = batch::run::Options {
+        resume: args.resume,
         cancel: Some(&STOP),
-        checkpoint: args.checkpoint_every.map(|k| (k, &checkpoint as integrator::Checkpoint)),
+        checkpoint_every: args.checkpoint_every,
         started: wall,
     };
-    let mut output = pool.install(|| match args.stats {
-        // With --stats, a short measurement of the accelerator alone follows the render.
-        Some(_) => {
+    let load = stats.stages.clone();
+    let (mut done, raw) = pool.install(|| -> Result<_> {
+        let prepared = integrator::Prepared::new(&scene, &cfgs[0])?;
+        let views = batch::plan::all_views(prepared.scene(), size);
+        let done = batch::run::run(&prepared, &views, &jobs, &cfgs, options, outer, inner)?;
+        // With --stats, a short measurement of the accelerator alone follows the renders.
+        let raw = args.stats.as_ref().map(|_| {
             let rays = photonmap::tools::bench::STATS_CALIBRATION_RAYS;
-            photonmap::tools::bench::render_calibrated(&scene, &cfg, &progress, control, rays)
-        }
-        None => integrator::render_scene_with(&scene, &cfg, &progress, control),
+            photonmap::dispatch!(prepared.accel(), a => {
+                photonmap::tools::bench::raw_rays(prepared.scene(), a, &cfgs[0], rays)
+            })
+        });
+        Ok((done, raw))
     })?;
-    output.stats.stages.splice(0..0, load);
-    output.stats.scene = args.scene.display().to_string();
-    let stats = write_outputs(&args, output, wall)?;
-    for w in &stats.warnings {
-        eprintln!("photonmap: warning: {w}");
+    let peak = photonmap::stats::peak_memory_bytes().unwrap_or(0);
+    for (i, d) in done.iter_mut().enumerate() {
+        if let Some(s) = &mut d.stats {
+            if i == 0 {
+                s.stages.splice(0..0, load.iter().cloned());
+            }
+            s.scene = args.scene.display().to_string();
+            s.peak_memory_bytes = peak;
+            if let Some(raw) = raw {
+                s.set_raw_rays(raw);
+            }
+        }
     }
-    let passes = if stats.passes > 1 { format!(", {} passes", stats.passes) } else { String::new() };
-    if !args.quiet || stats.cancelled {
+    let seconds = wall.elapsed().as_secs_f64();
+    if let [only] = &mut done[..] {
+        if let Some(s) = &mut only.stats {
+            s.wall_seconds = seconds;
+        }
+    }
+    if let Some(path) = &args.stats {
+        let json = match &done[..] {
+            [only] => serde_json::to_string_pretty(&only.stats)?,
+            _ => serde_json::to_string_pretty(&batch::run::BatchReport::new(&scene, &done, seconds))?,
+        };
+        std::fs::write(path, json)
+            .with_context(|| format!("{}: could not write the stats", path.display()))?;
+    }
+    let rendered: Vec<&Stats> = done.iter().filter_map(|d| d.stats.as_ref()).collect();
+    for s in &rendered {
+        for w in &s.warnings {
+            eprintln!("photonmap: warning: {w}");
+        }
+    }
+    let cancelled = rendered.iter().any(|s| s.cancelled);
+    let first = rendered.first().copied();
+    if !args.quiet || cancelled {
+        let (accel, threads) = first.map_or(("-".to_string(), 0), |s| (s.accel.clone(), s.threads));
+        let cfg = &cfgs[0];
+        let what = match &done[..] {
+            [only] => {
+                let passes = first.map_or(0, |s| s.passes);
+                let passes = if passes > 1 { format!(", {passes} passes") } else { String::new() };
+                let skipped = if only.stats.is_none() { " already finished (--resume)" } else { "" };
+                format!(
+                    "{}{skipped} ({}x{}, {} spp{passes})",
+                    only.job.output.display(),
+                    cfg.width,
+                    cfg.height,
+                    cfg.spp
+                )
+            }
+            _ => {
+                let skipped = done.len() - rendered.len();
+                let skipped = if skipped > 0 {
+                    format!(", {skipped} already finished (--resume)")
+                } else {
+                    String::new()
+                };
+                let per_minute = rendered.len() as f64 / seconds * 60.0;
+                format!("{} of {} images{skipped} ({per_minute:.1} a minute)", rendered.len(), jobs.len())
+            }
+        };
         eprintln!(
-            "photonmap: {} ({}x{}, {} spp{passes}) in {:.2} s with {} on {} threads{}",
-            args.output.display(),
-            cfg.width,
-            cfg.height,
-            cfg.spp,
-            stats.wall_seconds,
-            stats.accel,
-            stats.threads,
-            if stats.cancelled { " (interrupted)" } else { "" }
+            "photonmap: {what} in {seconds:.2} s with {accel} on {threads} threads{}",
+            if cancelled { " (interrupted)" } else { "" }
         );
     }
-    Ok(if stats.cancelled { Finished::Interrupted } else { Finished::Done })
+    Ok(if cancelled { Finished::Interrupted } else { Finished::Done })
 }
 
 /// Refuses output paths whose directory does not exist, before any work is done.
-fn check_output_dirs<'a>(paths: impl IntoIterator<Item = Option<&'a PathBuf>>) -> Result<()> {
-    for out in paths.into_iter().flatten() {
+fn check_output_dirs<'a>(paths: impl IntoIterator<Item = &'a PathBuf>) -> Result<()> {
+    let mut checked = std::collections::HashSet::new();
+    for out in paths {
         let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        if !dir.is_dir() {
+        if checked.insert(dir.to_path_buf()) && !dir.is_dir() {
             bail!("{}: the directory {} does not exist", out.display(), dir.display());
         }
     }
     Ok(())
-}
-
-/// Writes the image (EXR, and PNG if asked) and, if asked, the stats; returns the stats with
-/// the whole command's time and peak memory.
-fn write_outputs(args: &cli::RenderArgs, output: integrator::RenderOutput, wall: Instant) -> Result<Stats> {
-    let mut stats = output.stats;
-    output.film.write_exr(&args.output)?;
-    if let Some(png) = &args.png {
-        output.film.write_png(png)?;
-    }
-    stats.wall_seconds = wall.elapsed().as_secs_f64();
-    stats.peak_memory_bytes = photonmap::stats::peak_memory_bytes().unwrap_or(0);
-    if let Some(path) = &args.stats {
-        let json = serde_json::to_string_pretty(&stats)?;
-        std::fs::write(path, json)
-            .with_context(|| format!("{}: could not write the stats", path.display()))?;
-    }
-    Ok(stats)
 }
 
 fn agree(args: cli::AgreeArgs) -> Result<()> {
@@ -268,7 +319,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0 && **b <= 1e6)) {
         bail!("--budgets: {b} is not a number of seconds in (0, 1e6]");
     }
-    check_output_dirs([args.csv.as_ref(), args.plot.as_ref()])?;
+    check_output_dirs([args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten())?;
     let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
     let peers = match &args.peers {
         Some(path) => {

@@ -1,5 +1,10 @@
 //! Rendering many views and frames from one set of photon maps: the scene's named cameras
 //! ([`crate::scene::SceneCamera`]), each at the frames a render-farm frame list names
-//! ([`frames::parse_frames`]).
+//! ([`frames::parse_frames`]); which images that makes and their output names ([`plan`]);
+//! the loop that renders them with the photon maps shared and writes each as it is done
+//! ([`run`]); and the record in each image's header that `--resume` checks ([`meta`]).
 
 pub mod frames;
+pub mod meta;
+pub mod plan;
+pub mod run;

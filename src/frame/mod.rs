@@ -22,8 +22,12 @@ pub struct Frame<'a, A: Accel> {
     pub scene: &'a Scene,
     pub accel: &'a A,
     pub lights: &'a LightSet,
-    /// The scene's camera at the render's resolution.
+    /// The camera of the image being rendered, at the render's resolution.
     pub camera: Camera,
+    /// Every view the photon stages serve: all the images a batch renders from the same photon
+    /// maps (the guide's pilot looks through them, and a portal's inside is the side of the
+    /// first one's eye); for one image, its camera alone. Never empty.
+    pub views: &'a [Camera],
 }
 
 impl<'a, A: Accel> Frame<'a, A> {

@@ -193,7 +193,7 @@ impl MapStages<'_> {
         if portals.is_empty() {
             return PortalSet::default();
         }
-        let eye = frame.scene.camera.eye;
+        let eye = frame.views.first().unwrap_or(&frame.camera).eye;
         let (set, reason) = stats.run("photons.portals", "", |stats| {
             let (set, rays) = PortalSet::new(portals, eye, outside, derive_seed(seed, 0x9077, 0));
             stats.rays.photon += rays;

@@ -20,7 +20,7 @@ use crate::config::{Integrator, RenderConfig};
 use crate::film::Film;
 use crate::frame::{Counters, Frame, Progress};
 use crate::light::LightSet;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::stats::Stats;
 use std::borrow::Cow;
 
@@ -30,26 +30,41 @@ pub struct RenderOutput {
     pub stats: Stats,
 }
 
-/// Renders `frame` as `cfg` says, in as many passes as `cfg` and `control` allow. `stats`
-/// arrives with the stages already run (loading, lights, acceleration build) and is completed
-/// here. Generic over the accelerator so the inner loops are monomorphised per backend.
+/// What the images of a batch share, built once for all of them: the scene analysis (the
+/// caustic photons' aim, the photon guide and the portals, worked out at the first photon pass
+/// for every view of the batch) and, for two-pass photon mapping, each pass's photon maps and
+/// precomputed irradiance. Used with the [`Prepared`] scene that made it only.
+pub struct Shared {
+    analysis: maps::Analysis,
+    maps: photon::MapCache,
+}
+
+/// Renders `frame` as `cfg` says, in as many passes as `cfg` and `control` allow, with what
+/// the batch shares. `stats` arrives with the stages already run (loading, lights,
+/// acceleration build) and is completed here. Generic over the accelerator so the inner loops
+/// are monomorphised per backend.
 pub fn render<A: Accel>(
     frame: &Frame<'_, A>,
+    shared: &Shared,
     cfg: &RenderConfig,
     progress: &dyn Progress,
     control: Control<'_>,
     mut stats: Stats,
 ) -> RenderOutput {
     let start = std::time::Instant::now();
+    let analysis = &shared.analysis;
     let (film, counters) = match &cfg.integrator {
         Integrator::Photon(c) => {
-            passes::run(cfg, control, progress, &mut stats, &mut photon::PhotonMapper::new(frame, c))
+            let mut mapper = photon::PhotonMapper::new(frame, c, analysis, &shared.maps);
+            passes::run(cfg, control, progress, &mut stats, &mut mapper)
         }
         Integrator::Progressive(c) => {
-            passes::run(cfg, control, progress, &mut stats, &mut sppm::Progressive::new(frame, c))
+            let mut sppm = sppm::Progressive::new(frame, c, analysis);
+            passes::run(cfg, control, progress, &mut stats, &mut sppm)
         }
         Integrator::PassIndexed(c) => {
-            passes::run(cfg, control, progress, &mut stats, &mut pppm::PassIndexed::new(frame, c))
+            let mut pppm = pppm::PassIndexed::new(frame, c, analysis);
+            passes::run(cfg, control, progress, &mut stats, &mut pppm)
         }
         Integrator::Path(c) => {
             passes::run(cfg, control, progress, &mut stats, &mut path::PathTracer::new(frame, c))
@@ -129,14 +144,38 @@ impl<'s> Prepared<'s> {
         &self.accel
     }
 
-    /// Renders on the current rayon pool's threads.
+    /// What a batch of images of this scene shares ([`Shared`]); `batch`: keep each pass's
+    /// two-pass photon maps for the images after the first (one image: nothing is kept).
+    pub fn shared(&self, batch: bool) -> Shared {
+        Shared { analysis: maps::Analysis::of(&self.scene, &self.lights), maps: photon::MapCache::new(batch) }
+    }
+
+    /// Renders the scene's camera on the current rayon pool's threads.
     pub fn render(&self, cfg: &RenderConfig, progress: &dyn Progress, control: Control<'_>) -> RenderOutput {
+        let camera = self.scene.camera.with_resolution(cfg.width, cfg.height);
+        self.render_view(&self.shared(false), std::slice::from_ref(&camera), 0, cfg, progress, control)
+    }
+
+    /// Renders `views[view]` (at `cfg`'s resolution) on the current rayon pool's threads, one
+    /// image of a batch that renders every one of `views` with the photon maps in `shared`.
+    ///
+    /// # Panics
+    /// If `view` is out of range.
+    pub fn render_view(
+        &self,
+        shared: &Shared,
+        views: &[Camera],
+        view: usize,
+        cfg: &RenderConfig,
+        progress: &dyn Progress,
+        control: Control<'_>,
+    ) -> RenderOutput {
         let mut stats = self.stats.clone();
         stats.threads = rayon::current_num_threads();
-        let camera = self.scene.camera.with_resolution(cfg.width, cfg.height);
+        let camera = views[view].with_resolution(cfg.width, cfg.height);
         crate::dispatch!(&self.accel, a => {
-            let frame = Frame { scene: &self.scene, accel: a, lights: &self.lights, camera };
-            render(&frame, cfg, progress, control, stats)
+            let frame = Frame { scene: &self.scene, accel: a, lights: &self.lights, camera, views };
+            render(&frame, shared, cfg, progress, control, stats)
         })
     }
 }

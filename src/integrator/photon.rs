@@ -24,6 +24,8 @@ use crate::stats::{MapStats, Stats};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
+use std::cell::RefCell;
+use std::rc::Rc;
 
 /// Irradiance is precomputed at every this-many-th indirect photon (Christensen uses 4).
 const IRRADIANCE_STRIDE: usize = 4;
@@ -35,14 +37,66 @@ const SITE_LIGHT_SAMPLES: u32 = 16;
 pub struct PhotonMapper<'f, 'a, A: Accel> {
     frame: &'f Frame<'a, A>,
     cfg: &'f PhotonConfig,
-    analysis: Analysis,
+    analysis: &'f Analysis,
     gathers: GatherPair,
+    cache: &'f MapCache,
+}
+
+/// The photon maps of one pass and the irradiance precomputed from them.
+struct PassMaps {
+    maps: PhotonMaps,
+    irradiance: PrecomputedIrradiance,
+}
+
+/// Each pass's maps, kept (when asked) for the images of a batch after the first: the maps
+/// do not depend on the view, so a batch traces them once. Memory: every pass's maps at once.
+pub struct MapCache {
+    keep: bool,
+    passes: RefCell<Vec<Rc<PassMaps>>>,
+}
+
+impl MapCache {
+    /// `keep`: keep each pass's maps once traced (a batch); otherwise nothing is kept.
+    pub fn new(keep: bool) -> Self {
+        MapCache { keep, passes: RefCell::new(Vec::new()) }
+    }
+
+    fn get(&self, pass: u32) -> Option<Rc<PassMaps>> {
+        self.passes.borrow().get(pass as usize).cloned()
+    }
+
+    fn put(&self, pass: u32, maps: &Rc<PassMaps>) {
+        let mut passes = self.passes.borrow_mut();
+        if self.keep && passes.len() == pass as usize {
+            passes.push(Rc::clone(maps));
+        }
+    }
 }
 
 impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
-    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f PhotonConfig) -> Self {
-        let analysis = Analysis::of(frame.scene, frame.lights);
-        PhotonMapper { frame, cfg, analysis, gathers: GatherPair::new(&cfg.gathers, frame.scene) }
+    pub fn new(
+        frame: &'f Frame<'a, A>,
+        cfg: &'f PhotonConfig,
+        analysis: &'f Analysis,
+        cache: &'f MapCache,
+    ) -> Self {
+        PhotonMapper { frame, cfg, analysis, gathers: GatherPair::new(&cfg.gathers, frame.scene), cache }
+    }
+
+    /// The maps of `pass`: traced (and kept if the cache keeps them), or those an earlier
+    /// image of the batch traced.
+    fn pass_maps(&self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> Rc<PassMaps> {
+        if let Some(kept) = self.cache.get(pass.index) {
+            let why =
+                format!("pass {}'s maps and irradiance were made once for the batch's images", pass.index);
+            stats.skip("photons.shared", why);
+            return kept;
+        }
+        let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass.seed, stats, progress);
+        let irradiance = self.precompute(stats, &maps, sites, pass.seed);
+        let made = Rc::new(PassMaps { maps, irradiance });
+        self.cache.put(pass.index, &made);
+        made
     }
 
     fn stages(&self) -> MapStages<'f> {
@@ -123,13 +177,12 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
 
 impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
     fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let (maps, sites) = self.stages().trace(self.frame, &self.analysis, pass.seed, stats, progress);
-        let irradiance = self.precompute(stats, &maps, sites, pass.seed);
+        let made = self.pass_maps(pass, stats, progress);
         let shading = Shading {
             frame: self.frame,
             cfg: self.cfg,
-            maps: &maps,
-            irradiance: &irradiance,
+            maps: &made.maps,
+            irradiance: &made.irradiance,
             gathers: self.gathers,
         };
         let camera = &self.frame.camera;

@@ -31,18 +31,13 @@ use crate::stats::Stats;
 pub struct PassIndexed<'f, 'a, A: Accel> {
     frame: &'f Frame<'a, A>,
     cfg: &'f ProgressiveConfig,
-    analysis: Analysis,
+    analysis: &'f Analysis,
     gathers: GatherPair,
 }
 
 impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
-    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig) -> Self {
-        PassIndexed {
-            frame,
-            cfg,
-            analysis: Analysis::of(frame.scene, frame.lights),
-            gathers: GatherPair::new(&cfg.gathers, frame.scene),
-        }
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig, analysis: &'f Analysis) -> Self {
+        PassIndexed { frame, cfg, analysis, gathers: GatherPair::new(&cfg.gathers, frame.scene) }
     }
 }
 
@@ -54,7 +49,7 @@ pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
 
 impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
     fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let maps = pass_maps(self.frame, self.cfg, &self.analysis, pass.seed, stats, progress);
+        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass.seed, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let scale = radius2_scale(pass.index, cfg.alpha);
         let camera = &frame.camera;

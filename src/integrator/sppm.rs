@@ -67,18 +67,18 @@ struct PixelState {
 pub struct Progressive<'f, 'a, A: Accel> {
     frame: &'f Frame<'a, A>,
     cfg: &'f ProgressiveConfig,
-    analysis: Analysis,
+    analysis: &'f Analysis,
     gathers: GatherPair,
     states: Vec<PixelState>,
 }
 
 impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
-    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig) -> Self {
+    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig, analysis: &'f Analysis) -> Self {
         let pixels = frame.camera.width as usize * frame.camera.height as usize;
         Progressive {
             frame,
             cfg,
-            analysis: Analysis::of(frame.scene, frame.lights),
+            analysis,
             gathers: GatherPair::new(&cfg.gathers, frame.scene),
             states: vec![PixelState::default(); pixels],
         }
@@ -87,7 +87,7 @@ impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
 
 impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
     fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let maps = pass_maps(self.frame, self.cfg, &self.analysis, pass.seed, stats, progress);
+        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass.seed, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let why = "visible points, direct light and progressive radius updates";
         let width = frame.camera.width as usize;

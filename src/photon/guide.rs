@@ -44,6 +44,16 @@ use std::collections::HashSet;
 /// Camera rays across the long side of the image in the pilot that finds the seen region.
 const PILOT_SIDE: u32 = 128;
 
+/// Views of a batch the pilot looks through: a turntable's 60 frames are well covered by 8.
+pub const PILOT_VIEWS: usize = 8;
+
+/// At most `n` of `items`, evenly spaced from the first to the last.
+pub fn spread<T>(items: &[T], n: usize) -> impl Iterator<Item = &T> {
+    let len = items.len();
+    let take = len.min(n);
+    (0..take).map(move |i| if take <= 1 { &items[0] } else { &items[i * (len - 1) / (take - 1)] })
+}
+
 /// Share of each guided density (and of the photon split) kept uniform (by power).
 pub const DEFENSIVE: f32 = 0.15;
 
@@ -78,31 +88,35 @@ pub struct VisibleRegion {
 }
 
 impl VisibleRegion {
-    /// The region seen by a pilot of camera rays through `frame` (see the module doc). The
-    /// finest cell is twice the median footprint of a pilot ray where it lands; each landing
-    /// marks the cells, grown by one, of the level whose cell is at least twice its footprint.
+    /// The region seen by a pilot of camera rays through `frame`'s views (see the module doc;
+    /// at most [`PILOT_VIEWS`] of them, evenly spaced over the list, each with a pilot of its
+    /// own). The finest cell is twice the median footprint of a pilot ray where it lands; each
+    /// landing marks the cells, grown by one, of the level whose cell is at least twice its
+    /// footprint.
     pub fn of<A: Accel>(frame: &Frame<'_, A>, seed: u64) -> Self {
-        let cam = &frame.camera;
-        let (w, h) = (cam.width as f32, cam.height as f32);
-        let scale = PILOT_SIDE as f32 / w.max(h);
-        let (sw, sh) = (((w * scale).round() as u32).max(1), ((h * scale).round() as u32).max(1));
-        let (dx, dy) = (w / sw as f32, h / sh as f32);
         let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0x5EE_4E61, 0));
         let mut c = Counters::default();
-        let mut landings = Vec::with_capacity((sw * sh) as usize);
-        for j in 0..sh {
-            for i in 0..sw {
-                let (x, y) = ((i as f32 + 0.5) * dx, (j as f32 + 0.5) * dy);
-                let ray = cam.ray(x, y);
-                // The angle between this ray and its neighbour one pilot cell away.
-                let spread =
-                    (cam.ray(x + dx, y + dy).dir - ray.dir).length() * std::f32::consts::FRAC_1_SQRT_2;
-                let landing =
-                    walk(frame, Start::Ray(ray), Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
-                if let Some(l) = landing {
-                    let footprint = (l.hit.p - cam.eye).length() * spread;
-                    if footprint.is_finite() {
-                        landings.push((l.hit.p, footprint));
+        let mut landings = Vec::new();
+        for cam in spread(frame.views, PILOT_VIEWS) {
+            let (w, h) = (cam.width as f32, cam.height as f32);
+            let scale = PILOT_SIDE as f32 / w.max(h);
+            let (sw, sh) = (((w * scale).round() as u32).max(1), ((h * scale).round() as u32).max(1));
+            let (dx, dy) = (w / sw as f32, h / sh as f32);
+            for j in 0..sh {
+                for i in 0..sw {
+                    let (x, y) = ((i as f32 + 0.5) * dx, (j as f32 + 0.5) * dy);
+                    let ray = cam.ray(x, y);
+                    // The angle between this ray and its neighbour one pilot cell away.
+                    let spread =
+                        (cam.ray(x + dx, y + dy).dir - ray.dir).length() * std::f32::consts::FRAC_1_SQRT_2;
+                    let start = Start::Ray(ray);
+                    let landing =
+                        walk(frame, start, Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
+                    if let Some(l) = landing {
+                        let footprint = (l.hit.p - cam.eye).length() * spread;
+                        if footprint.is_finite() {
+                            landings.push((l.hit.p, footprint));
+                        }
                     }
                 }
             }

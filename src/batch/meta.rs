@@ -1,0 +1,113 @@
+//! What an output image records of how it was made, in its OpenEXR header: hashes of the scene
+//! as loaded and of every setting that changes the image, the camera and frame, the program's
+//! version, and whether the image is finished or a checkpoint of one. `--resume` skips an image
+//! whose record matches the one it would write.
+//!
+//! The hashes are FNV-1a (64 bits) over the loaded content, not over the files: any edit that
+//! changes the geometry, a material, a light, a portal, the view or a setting changes them, and
+//! reformatting a file does not. They are stable across runs and machines (no random keys).
+
+use crate::config::RenderConfig;
+use crate::scene::{Camera, Scene};
+use std::collections::BTreeMap;
+
+/// Header attribute names.
+pub const SCENE_HASH: &str = "photonmap.scene_hash";
+pub const SETTINGS_HASH: &str = "photonmap.settings_hash";
+pub const VIEW_HASH: &str = "photonmap.view_hash";
+pub const CAMERA: &str = "photonmap.camera";
+pub const FRAME: &str = "photonmap.frame";
+pub const VERSION: &str = "photonmap.version";
+/// `finished`, or `checkpoint after N passes`.
+pub const STATE: &str = "photonmap.state";
+pub const FINISHED: &str = "finished";
+
+/// The record of one image.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ImageMeta {
+    pub scene_hash: u64,
+    pub settings_hash: u64,
+    pub view_hash: u64,
+    pub camera: String,
+    pub frame: u32,
+}
+
+impl ImageMeta {
+    /// The record of `camera`'s `view` at `frame` rendered from `scene` as `cfg` says.
+    pub fn new(scene: &Scene, cfg: &RenderConfig, camera: &str, frame: u32, view: &Camera) -> Self {
+        ImageMeta {
+            scene_hash: scene_hash(scene),
+            settings_hash: settings_hash(cfg),
+            view_hash: fnv1a(format!("{view:?}").as_bytes()),
+            camera: camera.to_string(),
+            frame,
+        }
+    }
+
+    /// The header attributes of the image in `state` ([`FINISHED`] or a checkpoint's).
+    pub fn attributes(&self, state: &str) -> Vec<(&'static str, String)> {
+        vec![
+            (SCENE_HASH, format!("{:016x}", self.scene_hash)),
+            (SETTINGS_HASH, format!("{:016x}", self.settings_hash)),
+            (VIEW_HASH, format!("{:016x}", self.view_hash)),
+            (CAMERA, self.camera.clone()),
+            (FRAME, self.frame.to_string()),
+            (VERSION, env!("CARGO_PKG_VERSION").to_string()),
+            (STATE, state.to_string()),
+        ]
+    }
+
+    /// Whether `attributes` (read from a header) record this very image, finished.
+    pub fn is_finished_in(&self, attributes: &BTreeMap<String, String>) -> bool {
+        let expected = self.attributes(FINISHED);
+        expected.iter().all(|(name, value)| attributes.get(*name) == Some(value))
+    }
+}
+
+/// FNV-1a, 64 bits.
+pub fn fnv1a(bytes: &[u8]) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    h
+}
+
+/// The scene's content as loaded: vertices, triangles and their materials, materials, lights
+/// and portals (not the cameras: each image records its own view).
+pub fn scene_hash(scene: &Scene) -> u64 {
+    let mut bytes = Vec::with_capacity(scene.mesh.positions.len() * 12 + scene.mesh.indices.len() * 16);
+    for p in &scene.mesh.positions {
+        for v in p.to_array() {
+            bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
+    }
+    for (tri, m) in scene.mesh.indices.iter().zip(&scene.tri_material) {
+        for i in tri.iter().chain(std::iter::once(m)) {
+            bytes.extend_from_slice(&i.to_le_bytes());
+        }
+    }
+    let described =
+        format!("{:?}|{:?}|{:?}|{:?}", scene.materials, scene.material_names, scene.lights, scene.portals);
+    bytes.extend_from_slice(described.as_bytes());
+    fnv1a(&bytes)
+}
+
+/// Every setting that changes the image (the resolved configuration: integrator, budgets,
+/// seed, resolution, accelerator; thread counts and output paths are not in it).
+pub fn settings_hash(cfg: &RenderConfig) -> u64 {
+    fnv1a(format!("{cfg:?}").as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fnv1a_matches_its_published_values() {
+        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
+    }
+}
