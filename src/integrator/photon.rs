@@ -277,8 +277,8 @@ impl<A: Accel> Shading<'_, '_, A> {
         }
         if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
             l += match self.cfg.indirect {
-                IndirectMode::Estimate => match self.precomputed(hit, wo, m, scratch, c) {
-                    Some(e) => e.indirect,
+                IndirectMode::Estimate => match self.precomputed_indirect(hit, wo, m, scratch, c) {
+                    Some(e) => e,
                     None => {
                         c.queries += self.maps.indirect.len() as u64;
                         let (maps, g) = (&self.maps.indirect, &self.gathers.indirect);
@@ -310,6 +310,26 @@ impl<A: Accel> Shading<'_, '_, A> {
         let e = self.irradiance.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.sites)?;
         let f = kd * std::f32::consts::FRAC_1_PI;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
+    }
+
+    /// Reflected indirect radiance at a Lambertian surface from the precomputed irradiance
+    /// (either side of a site: [`PrecomputedIrradiance::lookup_indirect`]), or `None`.
+    #[inline]
+    fn precomputed_indirect(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Option<Vec3> {
+        let kd = m.lambertian()?;
+        if self.irradiance.is_empty() {
+            return None;
+        }
+        c.queries += 1;
+        let e = self.irradiance.lookup_indirect(hit.p, face_forward(hit.n, wo), &mut scratch.sites)?;
+        Some(kd * std::f32::consts::FRAC_1_PI * e)
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a

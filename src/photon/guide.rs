@@ -7,9 +7,10 @@
 //! wrong room. Two pieces address it:
 //!
 //! * [`VisibleRegion`]: the cells of grids around the points a coarse pilot of camera rays
-//!   lands on (128 rays across the long side of the image, each followed through mirrors and
-//!   glass), grown by one cell on every side, each point at the cell size of what its ray sees
-//!   (a point far away, seen through a window, marks a coarser cell). Photons stored inside count as *seen*; their
+//!   lands on (128 rays across the long side of the image, through each of up to 8 of the
+//!   views a batch renders, each followed through mirrors and glass), grown by one cell on
+//!   every side, each point at the cell size of what its ray sees (a point far away, seen
+//!   through a window, marks a coarser cell). Photons stored inside count as *seen*; their
 //!   share of the photons emitted is the map's efficiency in `--stats`.
 //! * [`EmissionGuide`]: learnt from a pilot of photons traced as usual, it tells each emitter
 //!   which of its emission samples lead to seen photons (after Hachisuka and Jensen 2011,

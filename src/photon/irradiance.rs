@@ -17,7 +17,7 @@ use super::pack;
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A precomputed irradiance sample: 28 bytes.
+/// A precomputed irradiance sample: 32 bytes.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 struct Site {
@@ -26,6 +26,8 @@ struct Site {
     direct: u32,
     indirect: u32,
     caustic: u32,
+    /// Indirect irradiance on the other side (the side of `-normal`).
+    indirect_back: u32,
 }
 
 /// Irradiance at a surface point, by the kind of light path that brought it.
@@ -102,29 +104,35 @@ impl PrecomputedIrradiance {
         // only: every site's value is the same in any order).
         let mut sites = sites;
         morton_sort(&mut sites);
-        let values: Vec<(SitePoint, Irradiance)> = sites
+        let indirect_maps = indirect;
+        let values: Vec<(SitePoint, Irradiance, Vec3)> = sites
             .into_par_iter()
             .enumerate()
             .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, site)| {
                 let (pos, n) = (site.pos, site.n);
-                let indirect = indirect.iter().map(|m| m.irradiance(pos, n, gather, scratch)).sum();
+                let [mut indirect, mut back] = [Vec3::ZERO; 2];
+                for m in indirect_maps {
+                    let [f, b] = m.irradiance_sides(pos, n, gather, scratch);
+                    (indirect, back) = (indirect + f, back + b);
+                }
                 let caustic = caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
-                (site, Irradiance { direct: direct(i, &site), indirect, caustic })
+                (site, Irradiance { direct: direct(i, &site), indirect, caustic }, back)
             })
             .collect();
         let largest = values
             .iter()
-            .map(|(_, e)| e.direct.max(e.indirect).max(e.caustic).max_element())
+            .map(|(_, e, back)| e.direct.max(e.indirect).max(e.caustic).max(*back).max_element())
             .fold(0.0, f32::max);
         let scale = pack::rgb9e5_scale(largest);
         let sites = values
             .into_iter()
-            .map(|(site, e)| Site {
+            .map(|(site, e, back)| Site {
                 pos: site.pos.to_array(),
                 normal: pack::encode_dir_oct(site.n),
                 direct: pack::rgb9e5_encode(e.direct / scale),
                 indirect: pack::rgb9e5_encode(e.indirect / scale),
                 caustic: pack::rgb9e5_encode(e.caustic / scale),
+                indirect_back: pack::rgb9e5_encode(back / scale),
             })
             .collect();
         PrecomputedIrradiance { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
@@ -156,6 +164,24 @@ impl PrecomputedIrradiance {
             indirect: pack::rgb9e5_decode(s.indirect) * self.scale,
             caustic: pack::rgb9e5_decode(s.caustic) * self.scale,
         })
+    }
+}
+
+impl PrecomputedIrradiance {
+    /// Indirect irradiance at `x` on the side of unit normal `ns`, from the nearest site lying
+    /// either way (its normal along `ns` or against it: each site holds both sides' indirect
+    /// irradiance) among the nearest [`CANDIDATES`]; `None` if none is near enough. Where only
+    /// one side of a surface gets photons, its other side is still found (the outside of a
+    /// room, dark: without it each such camera hit fell back to a full gather to find zero).
+    #[inline]
+    pub fn lookup_indirect(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
+        let parallel = |s: &Site| pack::decode_dir_oct(s.normal).dot(ns).abs() >= NORMAL_COS;
+        let (hint, rejected) = (scratch.last, &mut scratch.rejected);
+        let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, parallel, hint, rejected);
+        scratch.last = best.map(|b| b.index);
+        let s = self.tree.get(best?.index);
+        let front = pack::decode_dir_oct(s.normal).dot(ns) > 0.0;
+        Some(pack::rgb9e5_decode(if front { s.indirect } else { s.indirect_back }) * self.scale)
     }
 }
 

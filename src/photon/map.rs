@@ -177,16 +177,32 @@ impl PhotonMap {
     /// Irradiance at `x` on the side of `ns` (unit): `sum_p w_p power_p / (pi r^2)`, for
     /// Lambertian surfaces and precomputed irradiance (Christensen 1999).
     pub fn irradiance(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Vec3 {
-        let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
+        self.irradiance_sides(x, ns, params, scratch)[0]
+    }
+
+    /// Irradiance at `x` on the side of `ns` (unit) and on the other side, from one gather:
+    /// the flattened disc does not tell the sides apart, and each side's estimate sums the
+    /// photons of the disc that arrived on it (a wall lit from one side gets 0 on the other).
+    pub fn irradiance_sides(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        scratch: &mut Vec<Neighbor>,
+    ) -> [Vec3; 2] {
+        let Some(r2) = self.gather(x, ns, params, scratch) else { return [Vec3::ZERO; 2] };
         let inv_r2 = 1.0 / r2;
-        let mut sum = Vec3::ZERO;
+        let (mut front, mut back) = (Vec3::ZERO, Vec3::ZERO);
         for nb in estimated(scratch, params) {
             let p = self.tree.get(nb.index);
-            if pack::decode_dir_oct_unnormalized(p.dir).dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
+            let side = pack::decode_dir_oct_unnormalized(p.dir).dot(ns);
+            if side > 0.0 {
+                front += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
+            } else if side < 0.0 {
+                back += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
             }
         }
-        sum * self.scale / (PI * r2)
+        [front * self.scale / (PI * r2), back * self.scale / (PI * r2)]
     }
 
     /// Gathers the photons near `x` into `scratch` (a disc flattened along `ns`) and returns the
