@@ -226,29 +226,32 @@ def bsdf_dict(m):
     raise Refused(m["type"])
 
 
+def sensor_dict(mi, camera, eye, target, up, spp):
+    """The perspective sensor of our camera entry (its fov and film) looking from eye at target."""
+    return {
+        "type": "perspective",
+        "fov_axis": "y",
+        "fov": float(camera["vfov_deg"]),
+        "to_world": mi.ScalarTransform4f.look_at(
+            origin=[float(x) for x in eye], target=[float(x) for x in target], up=[float(x) for x in up]
+        ),
+        "film": {
+            "type": "hdrfilm",
+            "width": int(camera["width"]),
+            "height": int(camera["height"]),
+            "rfilter": {"type": "box"},
+            "pixel_format": "rgb",
+            "component_format": "float32",
+        },
+        "sampler": {"type": "independent", "sample_count": spp},
+    }
+
+
 def build(mi, camera, groups, lights, spp):
     scene = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": -1, "rr_depth": 5, "hide_emitters": False},
-        "sensor": {
-            "type": "perspective",
-            "fov_axis": "y",
-            "fov": float(camera["vfov_deg"]),
-            "to_world": mi.ScalarTransform4f.look_at(
-                origin=[float(x) for x in camera["eye"]],
-                target=[float(x) for x in camera["target"]],
-                up=[float(x) for x in camera["up"]],
-            ),
-            "film": {
-                "type": "hdrfilm",
-                "width": int(camera["width"]),
-                "height": int(camera["height"]),
-                "rfilter": {"type": "box"},
-                "pixel_format": "rgb",
-                "component_format": "float32",
-            },
-            "sampler": {"type": "independent", "sample_count": spp},
-        },
+        "sensor": sensor_dict(mi, camera, camera["eye"], camera["target"], camera["up"], spp),
     }
     for k, (name, (m, v, t)) in enumerate(groups.items()):
         props = mi.Properties()

@@ -60,21 +60,7 @@ def views(camera):
 
 
 def sensor(mi, camera, eye, target, up, spp):
-    return mi.load_dict({
-        "type": "perspective",
-        "fov_axis": "y",
-        "fov": float(camera["vfov_deg"]),
-        "to_world": mi.ScalarTransform4f.look_at(origin=list(eye), target=list(target), up=list(up)),
-        "film": {
-            "type": "hdrfilm",
-            "width": int(camera["width"]),
-            "height": int(camera["height"]),
-            "rfilter": {"type": "box"},
-            "pixel_format": "rgb",
-            "component_format": "float32",
-        },
-        "sampler": {"type": "independent", "sample_count": spp},
-    })
+    return mi.load_dict(ref.sensor_dict(mi, camera, eye, target, up, spp))
 
 
 def main():

@@ -291,6 +291,19 @@ impl<A: Accel> Shading<'_, '_, A> {
         l
     }
 
+    /// Whether the precomputed irradiance answers at `hit` seen from `wo`: the Lambertian BRDF
+    /// `kd / π` there and the normal on the viewer's side, counting the lookup to come; `None`
+    /// (not Lambertian, or nothing precomputed).
+    #[inline]
+    fn site_query(&self, hit: &SurfaceHit, wo: Vec3, m: &Material, c: &mut Counters) -> Option<(Vec3, Vec3)> {
+        let kd = m.lambertian()?;
+        if self.irradiance.is_empty() {
+            return None;
+        }
+        c.queries += 1;
+        Some((kd * std::f32::consts::FRAC_1_PI, face_forward(hit.n, wo)))
+    }
+
     /// Reflected radiance at a Lambertian surface from the precomputed irradiance, by kind of
     /// path, or `None` (not Lambertian, nothing precomputed, or no site near enough).
     #[inline]
@@ -302,13 +315,8 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Irradiance> {
-        let kd = m.lambertian()?;
-        if self.irradiance.is_empty() {
-            return None;
-        }
-        c.queries += 1;
-        let e = self.irradiance.lookup(hit.p, face_forward(hit.n, wo), &mut scratch.sites)?;
-        let f = kd * std::f32::consts::FRAC_1_PI;
+        let (f, ns) = self.site_query(hit, wo, m, c)?;
+        let e = self.irradiance.lookup(hit.p, ns, &mut scratch.sites)?;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }
 
@@ -323,13 +331,8 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Vec3> {
-        let kd = m.lambertian()?;
-        if self.irradiance.is_empty() {
-            return None;
-        }
-        c.queries += 1;
-        let e = self.irradiance.lookup_indirect(hit.p, face_forward(hit.n, wo), &mut scratch.sites)?;
-        Some(kd * std::f32::consts::FRAC_1_PI * e)
+        let (f, ns) = self.site_query(hit, wo, m, c)?;
+        Some(f * self.irradiance.lookup_indirect(hit.p, ns, &mut scratch.sites)?)
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
