@@ -170,7 +170,7 @@ impl PrecomputedIrradiance {
 impl PrecomputedIrradiance {
     /// Indirect irradiance at `x` on the side of unit normal `ns`, from the nearest site lying
     /// either way (its normal along `ns` or against it: each site holds both sides' indirect
-    /// irradiance) among the nearest [`CANDIDATES`]; `None` if none is near enough. Where only
+    /// irradiance) among the nearest eight (`CANDIDATES`); `None` if none is near enough. Where only
     /// one side of a surface gets photons, its other side is still found (the outside of a
     /// room, dark: without it each such camera hit fell back to a full gather to find zero).
     #[inline]
