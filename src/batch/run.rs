@@ -1,5 +1,5 @@
 //! The batch loop: every image of a [`plan`](super::plan) rendered in turn from one prepared
-//! scene, the photon maps shared ([`Shared`]), each image written (atomically, with its
+//! scene, the photon maps shared ([`Shared`](crate::integrator::Shared)), each image written (atomically, with its
 //! record in the header, [`super::meta`]) as soon as it is done, and with `--resume` the
 //! images already finished skipped.
 
