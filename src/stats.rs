@@ -90,6 +90,39 @@ pub struct Stats {
     /// `rays_per_second / raw_rays_per_second`: the share of the photon and camera stages'
     /// time that is ray casting (1 would mean nothing else costs anything); 0 when not measured.
     pub rays_to_raw_ratio: f64,
+    /// Where the camera stage's time went.
+    pub camera_time: CameraTime,
+}
+
+/// The camera stage's thread time (the per-pixel loops, summed over threads) and its shares:
+/// ray casting, photon gathers and irradiance lookups, and the rest (sampling, shading,
+/// light choice). The shares come from a random one in 16 of the calls timed; they sum to 1.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct CameraTime {
+    pub thread_seconds: f64,
+    pub rays_share: f64,
+    pub gathers_share: f64,
+    pub rest_share: f64,
+}
+
+impl CameraTime {
+    /// From the nanoseconds measured: all of the per-pixel loops, and the estimated parts in
+    /// ray casting and gathering (clamped so that no share is negative: the parts are
+    /// estimates, the whole is measured).
+    pub fn new(pixels_ns: u64, rays_ns: u64, gathers_ns: u64) -> Self {
+        if pixels_ns == 0 {
+            return CameraTime::default();
+        }
+        let whole = pixels_ns as f64;
+        let rays = (rays_ns as f64 / whole).min(1.0);
+        let gathers = (gathers_ns as f64 / whole).min(1.0 - rays);
+        CameraTime {
+            thread_seconds: whole * 1e-9,
+            rays_share: rays,
+            gathers_share: gathers,
+            rest_share: 1.0 - rays - gathers,
+        }
+    }
 }
 
 /// Ray rates of the accelerator alone, by kind of ray (rays/s), from [`crate::tools::bench::raw_rays`].

@@ -7,7 +7,7 @@
 //! parallel and every pixel has its own generator seeded from (pass seed, pixel), so the image
 //! does not depend on the thread count.
 
-use super::{Counters, Frame, Progress};
+use super::{Counters, Frame, Part, Progress};
 use crate::accel::{Accel, Hit};
 use crate::film::Film;
 use crate::geometry::Ray;
@@ -87,7 +87,7 @@ impl<A: Accel> Frame<'_, A> {
         }
         batch.hits.clear();
         batch.hits.resize(batch.rays.len(), None);
-        self.accel.intersect_batch(&batch.rays, &mut batch.hits);
+        c.timed(Part::Rays, || self.accel.intersect_batch(&batch.rays, &mut batch.hits));
         c.rays.camera += batch.rays.len() as u64;
     }
 }
@@ -127,6 +127,7 @@ where
             },
             |scratch, (y, row)| {
                 let mut c = Counters::default();
+                let start = std::time::Instant::now();
                 let radiance = row
                     .iter_mut()
                     .enumerate()
@@ -136,6 +137,7 @@ where
                         pixel(x as u32, y as u32, state, &mut rng, scratch, &mut c)
                     })
                     .collect();
+                c.clock.pixels_ns += start.elapsed().as_nanos() as u64;
                 progress.advance(1);
                 (radiance, c)
             },

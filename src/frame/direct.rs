@@ -5,7 +5,7 @@
 //! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
 //! the two everywhere.
 
-use super::{Counters, Frame, SurfaceHit};
+use super::{Counters, Frame, Part, SurfaceHit};
 use crate::accel::Accel;
 use crate::geometry::Ray;
 use crate::light::LightSample;
@@ -33,7 +33,8 @@ pub fn visible<A: Accel>(s: &Frame<'_, A>, hit: &SurfaceHit, ls: &LightSample, c
     } else {
         f32::INFINITY
     };
-    !s.accel.occluded(&Ray::segment(origin, ls.wi, 0.0, t_max))
+    let ray = Ray::segment(origin, ls.wi, 0.0, t_max);
+    !c.timed(Part::Rays, || s.accel.occluded(&ray))
 }
 
 /// One light sample at `hit`: a light picked by power, a point on it, and if the shadow ray
@@ -85,7 +86,7 @@ pub fn direct_light<A: Accel>(
             }
             c.rays.shadow += 1;
             let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
-            let Some(y) = s.trace(&ray) else { continue };
+            let Some(y) = s.trace(&ray, c) else { continue };
             let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
             if le == Vec3::ZERO {
                 continue;

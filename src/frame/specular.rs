@@ -54,7 +54,7 @@ pub fn walk<'s, A: Accel>(
             Some(hit) => hit.and_then(|h| frame.surface(h)),
             None => {
                 count(c);
-                frame.trace(&ray)
+                frame.trace(&ray, c)
             }
         };
         let hit = hit?;

@@ -90,6 +90,8 @@ fn finish_stats(stats: &mut Stats, counters: &Counters, cfg: &RenderConfig) {
         stats.gather_queries_per_second = counters.queries as f64 / camera_seconds;
     }
     stats.nonfinite_samples = counters.nonfinite;
+    let clock = &counters.clock;
+    stats.camera_time = crate::stats::CameraTime::new(clock.pixels_ns, clock.rays_ns, clock.gathers_ns);
     stats.width = cfg.width;
     stats.height = cfg.height;
     let traced_seconds: f64 = camera_seconds + photon_seconds;

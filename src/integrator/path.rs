@@ -137,7 +137,7 @@ fn trace_radiance<A: Accel>(
             first.and_then(|h| s.surface(h))
         } else {
             c.rays.path += 1;
-            s.trace(&ray)
+            s.trace(&ray, c)
         };
         let Some(hit) = hit else { break };
         let m = s.scene.material(hit.prim);

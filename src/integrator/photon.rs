@@ -13,7 +13,7 @@ use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
-use crate::frame::{Counters, Frame, Progress, SurfaceHit};
+use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material};
 use crate::photon::irradiance::{Irradiance, LookupScratch, PrecomputedIrradiance, SitePoint};
@@ -273,7 +273,8 @@ impl<A: Accel> Shading<'_, '_, A> {
         if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
             c.queries += self.maps.caustic.len() as u64;
             let (maps, g) = (&self.maps.caustic, &self.gathers.caustic);
-            l += PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, &mut scratch.neighbors);
+            let nb = &mut scratch.neighbors;
+            l += c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, nb));
         }
         if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
             l += match self.cfg.indirect {
@@ -282,7 +283,8 @@ impl<A: Accel> Shading<'_, '_, A> {
                     None => {
                         c.queries += self.maps.indirect.len() as u64;
                         let (maps, g) = (&self.maps.indirect, &self.gathers.indirect);
-                        PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, &mut scratch.neighbors)
+                        let nb = &mut scratch.neighbors;
+                        c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, nb))
                     }
                 },
                 IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
@@ -316,7 +318,7 @@ impl<A: Accel> Shading<'_, '_, A> {
         c: &mut Counters,
     ) -> Option<Irradiance> {
         let (f, ns) = self.site_query(hit, wo, m, c)?;
-        let e = self.irradiance.lookup(hit.p, ns, &mut scratch.sites)?;
+        let e = c.timed(Part::Gathers, || self.irradiance.lookup(hit.p, ns, &mut scratch.sites))?;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }
 
@@ -332,7 +334,8 @@ impl<A: Accel> Shading<'_, '_, A> {
         c: &mut Counters,
     ) -> Option<Vec3> {
         let (f, ns) = self.site_query(hit, wo, m, c)?;
-        Some(f * self.irradiance.lookup_indirect(hit.p, ns, &mut scratch.sites)?)
+        let e = c.timed(Part::Gathers, || self.irradiance.lookup_indirect(hit.p, ns, &mut scratch.sites))?;
+        Some(f * e)
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
@@ -366,8 +369,12 @@ impl<A: Accel> Shading<'_, '_, A> {
                 c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
                 let nb = &mut scratch.neighbors;
                 let g = &self.gathers;
-                ly += PhotonMaps::radiance(&self.maps.caustic, y.p, y.n, wy, my, &g.caustic, nb);
-                ly += PhotonMaps::radiance(&self.maps.indirect, y.p, y.n, wy, my, &g.indirect, nb);
+                let (caustic, indirect) = (&self.maps.caustic, &self.maps.indirect);
+                ly += c
+                    .timed(Part::Gathers, || PhotonMaps::radiance(caustic, y.p, y.n, wy, my, &g.caustic, nb));
+                ly += c.timed(Part::Gathers, || {
+                    PhotonMaps::radiance(indirect, y.p, y.n, wy, my, &g.indirect, nb)
+                });
                 ly
             };
             sum += beta * ly;

@@ -41,7 +41,7 @@ use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::SurfaceHit;
-use crate::frame::{Counters, Frame, Progress};
+use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::face_forward;
 use crate::photon::kdtree::Neighbor;
@@ -200,7 +200,7 @@ pub(super) fn visible_point<'s, A: Accel>(
 ) -> Option<Landing<'s>> {
     let ray = frame.visible_point_ray(&pass.samples, pass.index, x, y);
     c.rays.camera += 1;
-    let hit = frame.accel.intersect(&ray);
+    let hit = c.timed(Part::Rays, || frame.accel.intersect(&ray));
     let count = |c: &mut Counters| c.rays.specular += 1;
     walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _, _, _| {})
 }
@@ -260,11 +260,13 @@ pub(super) fn first_radius2(
 ) -> Option<f32> {
     let kinds = [(&maps.indirect, &gathers.indirect), (&maps.caustic, &gathers.caustic)];
     let mut r2 = f32::INFINITY;
-    for (kind, params) in kinds {
-        for map in kind.iter() {
-            r2 = r2.min(map.knn_radius2(x, ns, params, nb));
+    c.timed(Part::Gathers, || {
+        for (kind, params) in kinds {
+            for map in kind.iter() {
+                r2 = r2.min(map.knn_radius2(x, ns, params, nb));
+            }
         }
-    }
+    });
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
     (r2.is_finite() && r2 > 0.0).then_some(r2)
 }
@@ -288,15 +290,23 @@ pub(super) fn flux_within(
 ) -> (Vec3, u32) {
     let mut phi = Vec3::ZERO;
     let mut m = 0u32;
-    for map in maps.indirect.iter().chain(&maps.caustic) {
-        m += map.for_each_inside(v.hit.p, ns, footprint.r2, gathers.indirect.flatten, |offset, wi, power| {
-            let inside = footprint.contains(offset);
-            if inside {
-                phi += v.m.eval(v.hit.n, v.wo, wi) * power;
-            }
-            inside
-        });
-    }
+    c.timed(Part::Gathers, || {
+        for map in maps.indirect.iter().chain(&maps.caustic) {
+            m += map.for_each_inside(
+                v.hit.p,
+                ns,
+                footprint.r2,
+                gathers.indirect.flatten,
+                |offset, wi, power| {
+                    let inside = footprint.contains(offset);
+                    if inside {
+                        phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+                    }
+                    inside
+                },
+            );
+        }
+    });
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
     if m == 0 {
         // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
@@ -424,7 +434,7 @@ impl Footprint {
             c.rays.gather += 1;
             // At parameter 1 the ray reaches the surface's plane at `aim`, at 2 as far below.
             let ray = Ray::segment(origin, aim * t - lift * ns, 0.0, 2.0);
-            match frame.trace(&ray) {
+            match frame.trace(&ray, c) {
                 None => Reach::Edge,
                 Some(h) => {
                     let along = (h.p - hit.p).dot(t);

@@ -161,6 +161,10 @@ pub struct BenchRow {
     pub raw_shadow_rays_per_second: f64,
     /// Median over the runs of each run's `rays_per_second / raw_rays_per_second`.
     pub rays_to_raw_ratio: f64,
+    /// Medians of the camera stage's shares of thread time ([`crate::stats::CameraTime`]).
+    pub camera_rays_share: f64,
+    pub camera_gathers_share: f64,
+    pub camera_rest_share: f64,
     /// Bytes of the photon maps (kd-tree included) per stored photon.
     pub bytes_per_photon: f64,
     /// The first row's median seconds over this row's.
@@ -297,6 +301,9 @@ pub fn run(
             raw_incoherent_rays_per_second: raw(&|r| r.incoherent),
             raw_shadow_rays_per_second: raw(&|r| r.shadow),
             rays_to_raw_ratio: m(&|s| s.rays_to_raw_ratio),
+            camera_rays_share: m(&|s| s.camera_time.rays_share),
+            camera_gathers_share: m(&|s| s.camera_time.gathers_share),
+            camera_rest_share: m(&|s| s.camera_time.rest_share),
             bytes_per_photon: m(&bytes_per_photon),
             speedup,
         });
@@ -360,6 +367,9 @@ impl fmt::Display for BenchReport {
         line(f, "  raw incoherent rays, M/s", &|r| mega(r.raw_incoherent_rays_per_second))?;
         line(f, "  raw shadow rays, M/s", &|r| mega(r.raw_shadow_rays_per_second))?;
         line(f, "render / raw", &|r| format!("{:.3}", r.rays_to_raw_ratio))?;
+        line(f, "camera stage: ray casting", &|r| format!("{:.3}", r.camera_rays_share))?;
+        line(f, "  gathers and lookups", &|r| format!("{:.3}", r.camera_gathers_share))?;
+        line(f, "  the rest", &|r| format!("{:.3}", r.camera_rest_share))?;
         line(f, "bytes per stored photon", &|r| format!("{:.2}", r.bytes_per_photon))?;
         line(f, "speed-up", &|r| format!("{:.2}", r.speedup))?;
         writeln!(
