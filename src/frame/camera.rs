@@ -67,6 +67,20 @@ pub struct CameraBatch {
     pub hits: Vec<Option<Hit>>,
 }
 
+impl CameraBatch {
+    /// A ball holding every first hit of the batch (centre and radius), `None` without hits.
+    pub fn hit_bounds(&self) -> Option<(Vec3, f32)> {
+        let points = || self.rays.iter().zip(&self.hits).filter_map(|(r, h)| h.map(|h| r.at(h.t)));
+        let (sum, n) = points().fold((Vec3::ZERO, 0u32), |(s, n), p| (s + p, n + 1));
+        if n == 0 {
+            return None;
+        }
+        let centre = sum / n as f32;
+        let radius = points().map(|p| (p - centre).length()).fold(0.0, f32::max);
+        Some((centre, radius))
+    }
+}
+
 impl<A: Accel> Frame<'_, A> {
     /// Fills `batch` with the primary rays of pixel `(px, py)` and their hits (Embree traces
     /// them as packets).

@@ -196,6 +196,9 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                 |x, y, _, rng, scratch: &mut Scratch, c| {
                     self.frame.camera_rays(&pass.samples, x, y, &mut scratch.batch, c);
                     let batch = std::mem::take(&mut scratch.batch);
+                    if let Some((centre, radius)) = batch.hit_bounds() {
+                        scratch.sites.expect(centre, radius);
+                    }
                     let mut mean = SampleMean::default();
                     for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
                         mean.add(shading.radiance(*ray, *hit, rng, scratch, c), c);

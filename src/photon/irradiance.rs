@@ -61,13 +61,142 @@ pub struct PrecomputedIrradiance {
     scale: f32,
 }
 
-/// A thread's scratch space for [`PrecomputedIrradiance::lookup`]. It remembers the last site
-/// found, which starts the next search (a camera pixel's samples, looked up one after the other,
-/// mostly land by the same site): the answers do not depend on it, only the time.
+/// A thread's scratch space for [`PrecomputedIrradiance::lookup`] and
+/// [`PrecomputedIrradiance::lookup_indirect`]. It remembers the last site found, which starts the
+/// next search (a camera pixel's samples, looked up one after the other, mostly land by the same
+/// site), and every site around the last place searched ([`Neighbourhood`]), which answers most
+/// of the next queries without a search: the answers do not depend on either, only the time.
 #[derive(Debug, Default)]
 pub struct LookupScratch {
     rejected: Vec<Neighbor>,
     last: Option<u32>,
+    /// Where the coming queries lie ([`LookupScratch::expect`]).
+    region: Option<(Vec3, f32)>,
+    near: Neighbourhood,
+}
+
+/// Sites a neighbourhood holds at most.
+const NEIGHBOURHOOD_SITES: usize = 64;
+
+impl LookupScratch {
+    /// Tells the lookups that the next ones lie within `radius` of `centre` (a camera pixel's
+    /// first hits), until told otherwise: the first of them that the sites held do not answer
+    /// gathers the sites of that whole region (and a margin), and the others scan them.
+    pub fn expect(&mut self, centre: Vec3, radius: f32) {
+        self.region = Some((centre, radius));
+    }
+}
+
+/// Every site within `radius` of `centre`, so that a query at `x` whose answer lies nearer to
+/// `x` than `radius - |x - centre|` can be answered from these alone, exactly: no site outside
+/// is that near (the triangle inequality). A pixel's samples land within a pixel's footprint of
+/// each other: one search gathers the neighbourhood, and the other samples scan a few sites
+/// already in cache instead of walking the tree from its root.
+#[derive(Debug, Default)]
+struct Neighbourhood {
+    centre: Vec3,
+    /// Every site nearer than this to `centre` is held (0: empty).
+    radius: f32,
+    /// Rounding allowance on distances: computed distances may fall short of true ones by
+    /// about the rounding of the coordinates (positions far from the origin) and of the
+    /// arithmetic.
+    slack: f32,
+    sites: Vec<NearSite>,
+    /// Scratch for the search that gathers them.
+    found: Vec<Neighbor>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct NearSite {
+    pos: Vec3,
+    normal: Vec3,
+    /// Distance from the neighbourhood's centre (the sites are held in its order).
+    from_centre: f32,
+    index: u32,
+}
+
+/// What a [`Neighbourhood`] says about a query.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Known {
+    /// The answer, exactly (`None`: no site qualifies).
+    Answer(Option<u32>),
+    /// The query reaches past the sites held.
+    Unknown,
+}
+
+impl Neighbourhood {
+    /// The nearest site `accept`ed (by its decoded normal) among the `k` nearest to `x` within
+    /// `max_radius` — what [`KdTree::nearest_among`] returns — if the sites held decide it.
+    #[inline]
+    fn answer(&self, x: Vec3, k: usize, max_radius: f32, accept: impl Fn(Vec3) -> bool) -> Known {
+        if self.radius <= 0.0 {
+            return Known::Unknown;
+        }
+        let e = (x - self.centre).length();
+        let reach = self.radius - e - self.slack;
+        if reach <= 0.0 {
+            return Known::Unknown;
+        }
+        // Every site with `d2 < known` is held; the search takes `d2 <= max_radius²`.
+        let known = reach * reach;
+        let within = max_radius * max_radius;
+        let limit = known.min(f32::from_bits(within.to_bits() + 1));
+        let mut best = (limit, None);
+        // Squared distances of the rejected sites found nearer than the best at the time.
+        let mut rejected = [0.0f32; NEIGHBOURHOOD_SITES];
+        let mut n_rejected = 0;
+        for s in &self.sites {
+            // Sites come by distance from the centre: none after this one can be nearer.
+            let lower = s.from_centre - e - self.slack;
+            if lower > 0.0 && lower * lower >= best.0 {
+                break;
+            }
+            let d2 = (s.pos - x).length_squared();
+            if d2 < best.0 {
+                if accept(s.normal) {
+                    best = (d2, Some(s.index));
+                } else {
+                    rejected[n_rejected] = d2;
+                    n_rejected += 1;
+                }
+            }
+        }
+        let nearer = rejected[..n_rejected].iter().filter(|&&d2| d2 < best.0).count();
+        match best.1 {
+            Some(index) => Known::Answer((nearer < k).then_some(index)),
+            // No accepted site within the search's reach, which lies inside what is held:
+            // none at all.
+            None if nearer >= k || within < known => Known::Answer(None),
+            None => Known::Unknown,
+        }
+    }
+
+    /// Gathers the sites within `radius` of `centre` from `tree` (the nearest
+    /// [`NEIGHBOURHOOD_SITES`] if there are more, the radius shrunk to the farthest of them).
+    fn gather(&mut self, tree: &KdTree<Site>, centre: Vec3, radius: f32) {
+        tree.knn(centre, NEIGHBOURHOOD_SITES, radius, &mut self.found);
+        self.centre = centre;
+        self.radius = if self.found.len() == NEIGHBOURHOOD_SITES {
+            // Every site strictly nearer than the farthest one kept is held.
+            self.found[0].dist2.sqrt()
+        } else {
+            radius
+        };
+        let scale = centre.abs().max_element() + self.radius;
+        self.slack = self.radius * 1e-5 + 8.0 * f32::EPSILON * scale;
+        self.sites.clear();
+        self.found.sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2));
+        self.sites.extend(self.found.iter().map(|n| {
+            let s = tree.get(n.index);
+            let from_centre = n.dist2.sqrt();
+            NearSite {
+                pos: s.position(),
+                normal: pack::decode_dir_oct(s.normal),
+                from_centre,
+                index: n.index,
+            }
+        }));
+    }
 }
 
 /// A place where irradiance is precomputed: a photon's position, its error bound and the
@@ -173,15 +302,37 @@ impl PrecomputedIrradiance {
     /// irradiance) among the nearest eight (`CANDIDATES`); `None` if none is near enough. Where only
     /// one side of a surface gets photons, its other side is still found (the outside of a
     /// room, dark: without it each such camera hit fell back to a full gather to find zero).
+    /// Queries that the sites held in `scratch` decide ([`LookupScratch::expect`]) are answered
+    /// from them: the same answer, without a search.
     #[inline]
     pub fn lookup_indirect(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
-        let parallel = |s: &Site| pack::decode_dir_oct(s.normal).dot(ns).abs() >= NORMAL_COS;
-        let (hint, rejected) = (scratch.last, &mut scratch.rejected);
-        let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, parallel, hint, rejected);
-        scratch.last = best.map(|b| b.index);
-        let s = self.tree.get(best?.index);
+        let s = self.tree.get(self.indirect_site(x, ns, scratch)?);
         let front = pack::decode_dir_oct(s.normal).dot(ns) > 0.0;
         Some(pack::rgb9e5_decode(if front { s.indirect } else { s.indirect_back }) * self.scale)
+    }
+
+    /// The site [`PrecomputedIrradiance::lookup_indirect`] reads.
+    #[inline]
+    fn indirect_site(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<u32> {
+        let parallel = |n: Vec3| n.dot(ns).abs() >= NORMAL_COS;
+        let index = match scratch.near.answer(x, CANDIDATES, self.max_radius, parallel) {
+            Known::Answer(index) => index,
+            Known::Unknown => {
+                let accept = |s: &Site| parallel(pack::decode_dir_oct(s.normal));
+                let (hint, rejected) = (scratch.last, &mut scratch.rejected);
+                let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, accept, hint, rejected);
+                // The sites of the region the query lies in, wide enough that the others in it
+                // find their answers inside (if they are about as near as this one's).
+                if let Some((centre, radius)) = scratch.region.filter(|&(c, r)| (x - c).length() <= r) {
+                    let found = best.map_or(self.max_radius, |b| b.dist2.sqrt());
+                    // At most some 50 sites (a region spanning a silhouette would hold many more).
+                    scratch.near.gather(&self.tree, centre, (radius + 2.0 * found).min(8.0 * found));
+                }
+                best.map(|b| b.index)
+            }
+        };
+        scratch.last = index;
+        index
     }
 }
 
@@ -256,5 +407,73 @@ mod tests {
         assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");
         // Seen from below the floor nothing matches.
         assert!(cache.lookup(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y, &mut scratch).is_none());
+    }
+
+    /// Lookups answered from a neighbourhood give what a search from scratch gives, on a corner
+    /// of three walls (sites of three orientations, some queries on the far side), for pixels
+    /// of any size, with photons far from the origin too.
+    #[test]
+    fn neighbourhoods_answer_as_the_search_does() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg32::seed_from_u64(3);
+        for offset in [Vec3::ZERO, Vec3::new(3e3, -2e3, 1e3)] {
+            let normals = [Vec3::X, Vec3::Y, Vec3::Z];
+            let on_wall = |rng: &mut rand_pcg::Pcg32, w: usize| {
+                let mut p = Vec3::new(rng.gen(), rng.gen(), rng.gen());
+                p[w] = 0.0;
+                p + offset
+            };
+            let hits: Vec<PhotonHit> = (0..30000)
+                .map(|i| {
+                    let w = i % 3;
+                    let n = normals[w];
+                    PhotonHit {
+                        pos: on_wall(&mut rng, w),
+                        err: Vec3::ZERO,
+                        n,
+                        wi: n,
+                        power: Vec3::splat(1e-4),
+                    }
+                })
+                .collect();
+            let sites = pick_sites(std::slice::from_ref(&hits), 4);
+            let map = PhotonMap::build(hits, MapColor::Rgb, 30000);
+            let params = GatherParams { k: 20, max_radius: 0.05, kernel: Kernel::Box, flatten: 8.0 };
+            let cache = PrecomputedIrradiance::build(
+                sites,
+                std::slice::from_ref(&map),
+                &[],
+                &params,
+                &params,
+                |_, _| Vec3::ZERO,
+            );
+            let mut kept = LookupScratch::default();
+            let (mut answered, mut total) = (0, 0);
+            for pixel in [0.002f32, 0.01, 0.05, 0.3] {
+                for _ in 0..300 {
+                    let w = rng.gen_range(0..3);
+                    let centre = on_wall(&mut rng, w);
+                    kept.expect(centre, pixel);
+                    for _ in 0..16 {
+                        let mut x = centre + pixel * (Vec3::new(rng.gen(), rng.gen(), rng.gen()) - 0.5);
+                        x[w] = offset[w];
+                        let ns = if rng.gen_bool(0.2) { -normals[w] } else { normals[w] };
+                        let before = kept.near.radius > 0.0
+                            && kept.near.answer(x, CANDIDATES, 0.05, |_| true) != Known::Unknown;
+                        let got = cache.indirect_site(x, ns, &mut kept);
+                        let want = cache.indirect_site(x, ns, &mut LookupScratch::default());
+                        // The same site, or (far from the origin, where coordinates are coarse)
+                        // one at exactly the same distance: ties are broken arbitrarily.
+                        let d2 =
+                            |i: Option<u32>| i.map(|i| (cache.tree.get(i).position() - x).length_squared());
+                        assert!(got == want || d2(got) == d2(want), "at {x} facing {ns}, pixel {pixel}");
+                        answered += before as u32;
+                        total += 1;
+                    }
+                }
+            }
+            // The neighbourhoods did answer most of them.
+            assert!(answered * 2 > total, "{answered} of {total}");
+        }
     }
 }
