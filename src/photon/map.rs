@@ -16,8 +16,8 @@ use super::kdtree::{flattened_metric, KdPoint, KdTree, Neighbor};
 use super::pack;
 use crate::config::Kernel;
 use crate::material::{face_forward, Material};
-use rayon::prelude::*;
 use glam::Vec3;
+use rayon::prelude::*;
 use std::f32::consts::PI;
 
 /// A stored photon: where it landed, where it came from, and its power.
