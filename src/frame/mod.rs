@@ -103,7 +103,7 @@ impl std::ops::AddAssign for Clock {
 }
 
 impl Counters {
-    /// Runs `f`, a call of kind `part`, timing it one time in [`CLOCK_STRIDE`] (chosen at
+    /// Runs `f`, a call of kind `part`, timing it one time in `CLOCK_STRIDE` (16, chosen at
     /// random, so no periodic pattern of calls can bias the estimate).
     #[inline(always)]
     pub fn timed<T>(&mut self, part: Part, f: impl FnOnce() -> T) -> T {

@@ -64,7 +64,7 @@ pub struct PrecomputedIrradiance {
 /// A thread's scratch space for [`PrecomputedIrradiance::lookup`] and
 /// [`PrecomputedIrradiance::lookup_indirect`]. It remembers the last site found, which starts the
 /// next search (a camera pixel's samples, looked up one after the other, mostly land by the same
-/// site), and every site around the last place searched ([`Neighbourhood`]), which answers most
+/// site), and every site around the last place searched (a neighbourhood), which answers most
 /// of the next queries without a search: the answers do not depend on either, only the time.
 #[derive(Debug, Default)]
 pub struct LookupScratch {
