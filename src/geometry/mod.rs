@@ -7,10 +7,12 @@
 //! scale and any distance from the origin.
 
 mod aabb;
+mod attributes;
 mod mesh;
 mod ray;
 
 pub use aabb::{longest_axis, Aabb};
+pub use attributes::{ShadingPoint, VertexAttributes};
 pub use mesh::{MeshError, TriangleMesh};
 pub use ray::{
     barycentric_error, gamma, next_float_down, next_float_up, offset_distance, offset_ray_origin, Ray,

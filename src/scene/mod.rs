@@ -9,6 +9,7 @@ mod cameras;
 mod error;
 mod file;
 mod obj;
+mod transform;
 
 pub use camera::{Camera, CameraKey, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
@@ -18,10 +19,10 @@ pub use file::{
 pub use obj::MtlMaterial;
 
 use crate::config::RenderSettings;
-use crate::geometry::{Aabb, TriangleMesh};
+use crate::geometry::{Aabb, TriangleMesh, VertexAttributes};
 use crate::light::{LightDesc, Portal};
 use crate::material::Material;
-use file::{finite3, nonneg3, reflectance3, Scale};
+use file::{finite3, nonneg3, reflectance3};
 use glam::Vec3;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -35,6 +36,8 @@ pub struct Scene {
     /// Every camera of the scene file, in file order (at least one).
     pub cameras: Vec<SceneCamera>,
     pub mesh: TriangleMesh,
+    /// The mesh's per-vertex shading normals and texture coordinates.
+    pub attributes: VertexAttributes,
     /// Material index of each triangle.
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
@@ -63,12 +66,13 @@ impl Scene {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
         }
         let mut mesh = TriangleMesh::default();
+        let mut attributes = VertexAttributes::default();
         let mut tri_names: Vec<Option<String>> = Vec::new();
         let mut mtl: HashMap<String, MtlMaterial> = HashMap::new();
         for (i, entry) in file.meshes.iter().enumerate() {
             let obj_path = obj::relative_to(path, &entry.obj);
             let mut data = obj::load_obj(&obj_path)?;
-            transform(path, i, entry, &mut data.mesh)?;
+            transform::apply(path, i, entry, &mut data.mesh, &mut data.attributes)?;
             if let Some(m) = &entry.material {
                 tri_names.extend(std::iter::repeat_n(Some(m.clone()), data.mesh.len()));
             } else {
@@ -91,9 +95,13 @@ impl Scene {
             for (name, m) in data.materials {
                 mtl.entry(name).or_insert(m);
             }
+            attributes.append(mesh.positions.len(), &data.attributes, data.mesh.positions.len());
             mesh.append(&data.mesh);
         }
         mesh.validate().map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
+        attributes
+            .validate(mesh.positions.len())
+            .map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
         let (tri_material, materials, material_names) = resolve_materials(path, &tri_names, &mtl, &file)?;
         let lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
@@ -105,6 +113,7 @@ impl Scene {
             camera,
             cameras,
             mesh,
+            attributes,
             tri_material,
             materials,
             material_names,
@@ -168,34 +177,6 @@ impl Scene {
         }
         count
     }
-}
-
-fn transform(
-    path: &Path,
-    i: usize,
-    entry: &file::MeshEntry,
-    mesh: &mut TriangleMesh,
-) -> Result<(), SceneError> {
-    let scale = match entry.scale {
-        None => Vec3::ONE,
-        Some(Scale::Uniform(s)) => Vec3::splat(s),
-        Some(Scale::PerAxis(s)) => Vec3::from(s),
-    };
-    if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
-        return Err(SceneError::field(path, format!("mesh[{i}].scale"), "must be finite and non-zero"));
-    }
-    let translate = finite3(path, &format!("mesh[{i}].translate"), entry.translate.unwrap_or([0.0; 3]))?;
-    let mirrored = scale.x * scale.y * scale.z < 0.0;
-    for p in &mut mesh.positions {
-        *p = *p * scale + translate;
-    }
-    if mirrored {
-        // A mirroring scale flips the winding; restore counter-clockwise front faces.
-        for t in &mut mesh.indices {
-            t.swap(1, 2);
-        }
-    }
-    Ok(())
 }
 
 /// Per-triangle material indices, the materials, and their names.

@@ -1,10 +1,11 @@
-//! Wavefront OBJ/MTL loading through `tobj`, preceded by a line-by-line check so that a
-//! malformed file gets an error naming its line (tobj's own errors carry none).
+//! Wavefront OBJ/MTL loading: the OBJ's geometry is read here, line by line, so that a
+//! malformed file gets an error naming its line; MTL files are checked the same way and then
+//! read by `tobj` (whose own errors carry no line).
 
 use super::SceneError;
-use crate::geometry::TriangleMesh;
-use glam::Vec3;
-use std::cell::RefCell;
+use crate::geometry::{TriangleMesh, VertexAttributes};
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 /// One material as an MTL file gives it (fields as in the file; absent ones `None`).
@@ -21,69 +22,31 @@ pub struct MtlMaterial {
 /// An OBJ file's triangles with, per triangle, the name of its material (if any).
 pub struct ObjData {
     pub mesh: TriangleMesh,
+    /// The mesh's vertex normals and texture coordinates (empty lists where the file has none).
+    pub attributes: VertexAttributes,
     pub tri_material: Vec<Option<String>>,
     /// Each material name the OBJ uses, with the line of its first `usemtl`.
     pub used: Vec<(String, usize)>,
     pub materials: Vec<(String, MtlMaterial)>,
 }
 
-/// Loads and triangulates `path` (fan triangulation: a quad becomes (0,1,2),(0,2,3)).
+/// Loads and triangulates `path` (fan triangulation: a quad becomes (0,1,2),(0,2,3)). Each
+/// distinct `v/vt/vn` corner becomes a vertex; a triangle whose three corners have normals
+/// is wound so that its geometric normal faces the side they point to (pbrt and Mitsuba shade
+/// such triangles by their normals' side), the others keep the file's winding.
 pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
     let text = read(path)?;
-    let runs = check_obj(path, &text)?;
+    let parsed = parse_obj(path, &text)?;
     let dir = path.parent().unwrap_or(Path::new(".")).to_owned();
-    let mtl_error: RefCell<Option<SceneError>> = RefCell::new(None);
-    let options =
-        tobj::LoadOptions { triangulate: true, single_index: false, ignore_points: true, ignore_lines: true };
-    let loaded = tobj::load_obj_buf(&mut text.as_bytes(), &options, |mtl| {
-        let mtl_path = dir.join(mtl);
-        let result = read(&mtl_path).and_then(|t| check_mtl(&mtl_path, &t).map(|_| t));
-        match result {
-            Ok(t) => tobj::load_mtl_buf(&mut t.as_bytes()),
-            Err(e) => {
-                *mtl_error.borrow_mut() = Some(e);
-                Err(tobj::LoadError::OpenFileFailed)
-            }
-        }
-    });
-    let (models, materials) =
-        loaded.map_err(|e| SceneError::file(path, format!("OBJ could not be read: {e}")))?;
-    if let Some(e) = mtl_error.into_inner() {
-        return Err(e);
-    }
-    let materials = materials.map_err(|e| SceneError::file(path, format!("MTL could not be read: {e}")))?;
-
-    let mut mesh = TriangleMesh::default();
-    for model in &models {
-        let m = &model.mesh;
-        let part = TriangleMesh {
-            positions: m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
-            indices: m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
-        };
-        mesh.append(&part);
-    }
-    // Materials by the OBJ's own `usemtl` runs (tobj drops names its MTL lacks, which the
-    // scene file may still define). tobj keeps faces in file order and fans an n-gon into
-    // n - 2 triangles, so the runs line up with its triangles.
-    let mut tri_material = Vec::with_capacity(mesh.len());
-    let mut used: Vec<(String, usize)> = Vec::new();
-    for run in &runs {
-        tri_material.extend(std::iter::repeat_n(run.material.clone(), run.triangles));
-        if let Some(name) = &run.material {
-            if !used.iter().any(|(n, _)| n == name) {
-                used.push((name.clone(), run.line));
-            }
-        }
-    }
-    if tri_material.len() != mesh.len() {
-        return Err(SceneError::file(
-            path,
-            format!("{} triangles read but {} counted from the faces", mesh.len(), tri_material.len()),
-        ));
-    }
-    let materials = materials
-        .into_iter()
-        .map(|m| {
+    let mut materials: Vec<(String, MtlMaterial)> = Vec::new();
+    for (name, line) in &parsed.libraries {
+        let mtl_path = dir.join(name);
+        let t = read(&mtl_path)?;
+        check_mtl(&mtl_path, &t)?;
+        let (loaded, _) = tobj::load_mtl_buf(&mut t.as_bytes()).map_err(|e| {
+            SceneError::line(path, *line, format!("material library `{name}` could not be read: {e}"))
+        })?;
+        for m in loaded {
             let mtl = MtlMaterial {
                 kd: m.diffuse,
                 ks: m.specular,
@@ -92,10 +55,22 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 ni: m.optical_density,
                 illum: m.illumination_model,
             };
-            (m.name, mtl)
-        })
-        .collect();
-    Ok(ObjData { mesh, tri_material, used, materials })
+            if !materials.iter().any(|(n, _)| *n == m.name) {
+                materials.push((m.name, mtl));
+            }
+        }
+    }
+    let mut tri_material = Vec::with_capacity(parsed.mesh.len());
+    let mut used: Vec<(String, usize)> = Vec::new();
+    for run in &parsed.runs {
+        tri_material.extend(std::iter::repeat_n(run.material.clone(), run.triangles));
+        if let Some(name) = &run.material {
+            if !used.iter().any(|(n, _)| n == name) {
+                used.push((name.clone(), run.line));
+            }
+        }
+    }
+    Ok(ObjData { mesh: parsed.mesh, attributes: parsed.attributes, tri_material, used, materials })
 }
 
 fn read(path: &Path) -> Result<String, SceneError> {
@@ -114,25 +89,39 @@ struct Run {
     line: usize,
 }
 
-/// Checks each statement tobj reads, as tobj reads it (words split on whitespace, no trailing
-/// comments), so that whatever tobj would refuse, or panic on, is refused here with a line:
-/// `v` has 3, 4 (`w`) or 6 (RGB) finite numbers; `vt`/`vn` have 2/3 numbers; every `f` has at
-/// least 3 vertex references and each of their `v/vt/vn` indices parses and is in range
-/// (negative ones count from the end); `l` is a polyline of at most 2 vertices; `mtllib` names
-/// an existing file and `usemtl` a material.
-fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
-    let mut counts = [0i64; 3]; // v, vt, vn defined so far
-    let mut faces = 0usize;
+/// An OBJ's geometry, its material runs and its material libraries (name, line).
+struct Parsed {
+    mesh: TriangleMesh,
+    attributes: VertexAttributes,
+    runs: Vec<Run>,
+    libraries: Vec<(String, usize)>,
+}
+
+/// Reads every statement of an OBJ, refusing with its line whatever cannot be rendered as
+/// written (words split on whitespace, no trailing comments, as `tobj` and most readers take
+/// them): `v` has 3, 4 (`w`, ignored as tobj ignores it) or 6 (RGB) finite numbers; `vt`/`vn`
+/// have 2/3 finite numbers; every `f` has at least 3 vertex references and each of their
+/// `v/vt/vn` indices parses and is in range (negative ones count from the end); `l` is a
+/// polyline of at most 2 vertices (not rendered); `mtllib` names an existing file and
+/// `usemtl` a material.
+fn parse_obj(path: &Path, text: &str) -> Result<Parsed, SceneError> {
+    let mut v: Vec<Vec3> = Vec::new();
+    let mut vt: Vec<Vec2> = Vec::new();
+    let mut vn: Vec<Vec3> = Vec::new();
+    // Faces as corner lists; each corner (v, vt, vn), u32::MAX where absent.
+    let mut corners: Vec<[u32; 3]> = Vec::new();
+    let mut face_starts: Vec<usize> = Vec::new();
     let mut runs: Vec<Run> = Vec::new();
+    let mut libraries: Vec<(String, usize)> = Vec::new();
     let mut material: Option<(String, usize)> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let mut words = raw.split_whitespace();
         let Some(keyword) = words.next() else { continue };
         let bad = |message: String| SceneError::line(path, line, message);
-        // tobj reads the rest of the line after the first space as a name.
-        let tobj_name = raw.split_once(' ').map_or("", |(_, rest)| rest).trim();
-        if matches!(keyword, "v" | "f" | "l") && raw.contains('#') {
+        // The rest of the line after the first space, as a name.
+        let rest_name = raw.split_once(' ').map_or("", |(_, rest)| rest).trim();
+        if matches!(keyword, "v" | "vt" | "vn" | "f" | "l") && raw.contains('#') {
             return Err(bad(format!(
                 "`#` in a `{keyword}` statement: comments must be on lines of their own"
             )));
@@ -146,38 +135,38 @@ fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
                         nums.len()
                     )));
                 }
-                let mut xyzw = [1.0f32; 4];
-                for (k, n) in nums.iter().enumerate() {
-                    match n.parse::<f32>() {
-                        Ok(x) if x.is_finite() => xyzw[k.min(3)] = x,
-                        Ok(x) => return Err(bad(format!("vertex coordinate {x} is not finite"))),
-                        Err(_) => return Err(bad(format!("`{n}` is not a number"))),
-                    }
-                }
-                if nums.len() == 4 && !xyzw[..3].iter().all(|x| (x / xyzw[3]).is_finite()) {
-                    return Err(bad(format!("vertex w = {} gives non-finite coordinates", xyzw[3])));
-                }
-                counts[0] += 1;
+                let xyz = finite_numbers(&nums[..3], "vertex coordinate").map_err(&bad)?;
+                finite_numbers(&nums[3..], "vertex w or colour").map_err(&bad)?;
+                v.push(Vec3::from_slice(&xyz));
             }
             "vt" | "vn" => {
-                let (need, slot) = if keyword == "vt" { (2, 1) } else { (3, 2) };
+                let need = if keyword == "vt" { 2 } else { 3 };
                 let nums: Vec<&str> = words.take(need).collect();
-                if nums.len() < need || nums.iter().any(|n| n.parse::<f32>().is_err()) {
+                if nums.len() < need {
                     return Err(bad(format!("`{keyword}` needs {need} numbers")));
                 }
-                counts[slot] += 1;
+                let x = finite_numbers(&nums, &format!("`{keyword}` value")).map_err(&bad)?;
+                if keyword == "vt" {
+                    vt.push(Vec2::new(x[0], x[1]));
+                } else {
+                    // A zero or unnormalisable normal is no normal.
+                    vn.push(Vec3::from_slice(&x).try_normalize().unwrap_or(Vec3::ZERO));
+                }
             }
             "f" | "l" => {
                 let refs: Vec<&str> = words.collect();
                 if keyword == "f" && refs.len() < 3 {
                     return Err(bad(format!("face needs 3 vertices, found {}", refs.len())));
                 }
+                let counts = [v.len(), vt.len(), vn.len()];
+                let mut face = Vec::with_capacity(refs.len());
                 for r in &refs {
-                    check_reference(r, &counts)
-                        .map_err(|m| bad(if r.contains('/') { format!("`{r}`: {m}") } else { m }))?;
+                    face.push(
+                        reference(r, counts)
+                            .map_err(|m| bad(if r.contains('/') { format!("`{r}`: {m}") } else { m }))?,
+                    );
                 }
                 if keyword == "l" {
-                    // tobj would read a polyline of 3 or more vertices as a face.
                     if refs.len() > 2 {
                         return Err(bad(format!(
                             "polyline (`l`) of {} vertices: only faces (`f`) are rendered",
@@ -186,7 +175,8 @@ fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
                     }
                     continue;
                 }
-                faces += 1;
+                face_starts.push(corners.len());
+                corners.extend(face);
                 let name = material.as_ref().map(|(n, _)| n);
                 match runs.last_mut() {
                     Some(run) if run.material.as_ref() == name => run.triangles += refs.len() - 2,
@@ -199,51 +189,117 @@ fn check_obj(path: &Path, text: &str) -> Result<Vec<Run>, SceneError> {
             }
             "usemtl" => {
                 let name = raw.split('#').next().unwrap_or("").trim()["usemtl".len()..].trim();
-                if name.is_empty() || tobj_name.is_empty() {
+                if name.is_empty() || rest_name.is_empty() {
                     return Err(bad("usemtl needs a material name, after a space".into()));
                 }
                 material = Some((name.to_owned(), line));
             }
             "mtllib" => {
-                // The name runs to the end of the line (it may hold spaces), as tobj reads it.
-                let mtl = path.parent().unwrap_or(Path::new(".")).join(tobj_name);
-                if tobj_name.is_empty() {
+                // The name runs to the end of the line (it may hold spaces).
+                let mtl = path.parent().unwrap_or(Path::new(".")).join(rest_name);
+                if rest_name.is_empty() {
                     return Err(bad("mtllib needs a file name, after a space".into()));
                 }
                 if !mtl.is_file() {
                     return Err(bad(format!(
-                        "material library `{tobj_name}` not found at {}",
+                        "material library `{rest_name}` not found at {}",
                         mtl.display()
                     )));
                 }
+                libraries.push((rest_name.to_owned(), line));
             }
             _ => {}
         }
     }
-    if faces == 0 {
+    if face_starts.is_empty() {
         return Err(SceneError::file(path, "no faces: the OBJ holds no triangles"));
     }
-    Ok(runs)
+    Ok(assemble(&v, &vt, &vn, &corners, &face_starts, runs, libraries))
 }
 
-/// Checks one `v`, `v/vt`, `v//vn` or `v/vt/vn` reference against the `v`, `vt` and `vn`
-/// counts so far (1-based; negative counts back from the last one).
-fn check_reference(r: &str, counts: &[i64; 3]) -> Result<(), String> {
+/// Parses finite numbers, or says which word is not one (`what` names a non-finite one).
+fn finite_numbers(words: &[&str], what: &str) -> Result<Vec<f32>, String> {
+    words
+        .iter()
+        .map(|w| match w.parse::<f32>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            Ok(x) => Err(format!("{what} {x} is not finite")),
+            Err(_) => Err(format!("`{w}` is not a number")),
+        })
+        .collect()
+}
+
+/// Fans the faces into triangles over one vertex per distinct corner.
+fn assemble(
+    v: &[Vec3],
+    vt: &[Vec2],
+    vn: &[Vec3],
+    corners: &[[u32; 3]],
+    face_starts: &[usize],
+    runs: Vec<Run>,
+    libraries: Vec<(String, usize)>,
+) -> Parsed {
+    const NONE: u32 = u32::MAX;
+    let has_uv = corners.iter().any(|c| c[1] != NONE);
+    let has_normal = corners.iter().any(|c| c[2] != NONE && vn[c[2] as usize] != Vec3::ZERO);
+    let mut mesh = TriangleMesh::default();
+    let mut attributes = VertexAttributes::default();
+    let mut vertex_of: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut vertex = |c: [u32; 3], mesh: &mut TriangleMesh, attributes: &mut VertexAttributes| -> u32 {
+        let key = [c[0], if has_uv { c[1] } else { NONE }, if has_normal { c[2] } else { NONE }];
+        *vertex_of.entry(key).or_insert_with(|| {
+            mesh.positions.push(v[c[0] as usize]);
+            if has_uv {
+                attributes.uvs.push(if c[1] == NONE { Vec2::ZERO } else { vt[c[1] as usize] });
+            }
+            if has_normal {
+                attributes.normals.push(if c[2] == NONE { Vec3::ZERO } else { vn[c[2] as usize] });
+            }
+            (mesh.positions.len() - 1) as u32
+        })
+    };
+    for (f, &start) in face_starts.iter().enumerate() {
+        let end = face_starts.get(f + 1).copied().unwrap_or(corners.len());
+        let face = &corners[start..end];
+        for k in 2..face.len() {
+            let mut tri = [face[0], face[k - 1], face[k]].map(|c| vertex(c, &mut mesh, &mut attributes));
+            if has_normal {
+                let n: Vec3 = tri.iter().map(|&i| attributes.normals[i as usize]).sum();
+                let [a, b, c] = tri.map(|i| mesh.positions[i as usize]);
+                if tri.iter().all(|&i| attributes.normals[i as usize] != Vec3::ZERO)
+                    && (b - a).cross(c - a).dot(n) < 0.0
+                {
+                    tri.swap(1, 2);
+                }
+            }
+            mesh.indices.push(tri);
+        }
+    }
+    Parsed { mesh, attributes, runs, libraries }
+}
+
+/// Resolves one `v`, `v/vt`, `v//vn` or `v/vt/vn` reference against the `v`, `vt` and `vn`
+/// counts so far (1-based; negative counts back from the last one) to 0-based indices,
+/// `u32::MAX` for a part that is absent.
+fn reference(r: &str, counts: [usize; 3]) -> Result<[u32; 3], String> {
     let parts: Vec<&str> = r.split('/').collect();
     if parts.len() > 3 || parts[0].is_empty() {
         return Err("not a vertex reference (v, v/vt, v//vn or v/vt/vn)".into());
     }
-    for ((part, &count), what) in parts.iter().zip(counts).zip(["vertex", "texture coordinate", "normal"]) {
+    let mut out = [u32::MAX; 3];
+    for (k, (part, what)) in parts.iter().zip(["vertex", "texture coordinate", "normal"]).enumerate() {
         if part.is_empty() {
             continue;
         }
+        let count = counts[k] as i64;
         let idx: i64 = part.parse().map_err(|_| format!("`{part}` is not a {what} index"))?;
         let resolved = if idx < 0 { count.saturating_add(idx) } else { idx - 1 };
         if idx == 0 || resolved < 0 || resolved >= count {
             return Err(format!("{what} index {idx} out of range: {count} defined so far"));
         }
+        out[k] = resolved as u32;
     }
-    Ok(())
+    Ok(out)
 }
 
 /// Checks the numeric MTL statements the renderer uses.

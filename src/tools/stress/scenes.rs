@@ -91,6 +91,7 @@ impl Builder {
             camera,
             cameras: vec![SceneCamera::still("camera", camera)],
             mesh: self.mesh,
+            attributes: Default::default(),
             tri_material: self.tri_material,
             materials: self.materials,
             material_names: self.names,
