@@ -62,7 +62,7 @@ impl VertexAttributes {
             None
         } else {
             let n = tri.map(|i| self.normals[i as usize]);
-            if n.iter().any(|n| *n == Vec3::ZERO) {
+            if n.contains(&Vec3::ZERO) {
                 None
             } else {
                 (w[0] * n[0] + w[1] * n[1] + w[2] * n[2]).try_normalize()
