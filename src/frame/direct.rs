@@ -10,6 +10,7 @@ use crate::accel::Accel;
 use crate::geometry::Ray;
 use crate::light::LightSample;
 use crate::material::Material;
+use crate::material::TransportMode::Radiance;
 use crate::sampling::power_heuristic;
 use glam::Vec3;
 use rand::Rng;
@@ -52,12 +53,13 @@ pub fn light_sample<A: Accel>(
     c: &mut Counters,
 ) -> Vec3 {
     let Some(ls) = s.lights.sample_li(hit.p, rng.gen(), [rng.gen(), rng.gen()]) else { return Vec3::ZERO };
-    let f = m.eval(hit.n, wo, ls.wi);
+    let normals = hit.normals();
+    let (f, cos) = normals.eval_parts(m, wo, ls.wi);
     if f == Vec3::ZERO || ls.li == Vec3::ZERO || !visible(s, hit, &ls, c) {
         return Vec3::ZERO;
     }
-    let w = if mis && !ls.delta { power_heuristic(1.0, ls.pdf, 1.0, m.pdf(hit.n, wo, ls.wi)) } else { 1.0 };
-    f * ls.li * (hit.n.dot(ls.wi).abs() * w / ls.pdf)
+    let w = if mis && !ls.delta { power_heuristic(1.0, ls.pdf, 1.0, normals.pdf(m, wo, ls.wi)) } else { 1.0 };
+    f * ls.li * (cos * w / ls.pdf)
 }
 
 /// Direct radiance reflected toward `wo` at `hit`, averaged over `n` light samples (plus, when
@@ -80,7 +82,11 @@ pub fn direct_light<A: Accel>(
         sum += light_sample(s, hit, wo, m, mis, rng, c);
         // BSDF sampling toward area lights.
         if mis {
-            let Some(bs) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
+            let Some(scattered) = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], Radiance)
+            else {
+                continue;
+            };
+            let bs = scattered.sample;
             if bs.delta || bs.pdf <= 0.0 {
                 continue;
             }
@@ -93,7 +99,7 @@ pub fn direct_light<A: Accel>(
             }
             let light_pdf = s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n);
             let w = power_heuristic(1.0, bs.pdf, 1.0, light_pdf);
-            sum += bs.weight(hit.n) * le * w;
+            sum += scattered.weight * le * w;
         }
     }
     sum / n as f32

@@ -1,8 +1,10 @@
 //! The surface point a ray reaches, and rays leaving it.
 
-use crate::geometry::offset_ray_origin;
-use crate::material::face_forward;
-use glam::Vec3;
+use crate::accel::Hit;
+use crate::geometry::{gamma, offset_ray_origin};
+use crate::material::{face_forward, Normals};
+use crate::scene::Scene;
+use glam::{Vec2, Vec3};
 
 /// A surface point reached by a ray.
 #[derive(Clone, Copy, Debug)]
@@ -12,14 +14,75 @@ pub struct SurfaceHit {
     pub err: Vec3,
     /// Unit geometric normal (front side as wound).
     pub n: Vec3,
+    /// Unit shading normal, interpolated from the vertex normals, on the side of `n`; `n`
+    /// itself where the triangle is flat-shaded.
+    pub ns: Vec3,
+    /// Texture coordinates (zero where the mesh has none).
+    pub uv: Vec2,
+    /// Where rays leaving on the shading normal's side start from: `p` lifted onto the smooth
+    /// surface the vertex normals describe (Hanika, "Hacking the shadow terminator", Ray
+    /// Tracing Gems II, 2021), or `p` itself on a flat triangle or where the lift would go
+    /// below the face (a saddle or a concave spot).
+    pub lifted: Vec3,
     pub prim: u32,
     pub t: f32,
 }
 
 impl SurfaceHit {
-    /// A robust origin for a ray leaving this point toward `w`.
+    /// The surface point of a backend's hit on `scene`'s mesh (`None` on a degenerate
+    /// triangle, which every backend treats as a miss).
+    #[inline]
+    pub fn new(scene: &Scene, hit: Hit) -> Option<SurfaceHit> {
+        let n = scene.mesh.normal(hit.prim)?;
+        let (p, err) = scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
+        let mut at = SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, lifted: p, prim: hit.prim, t: hit.t };
+        let a = &scene.attributes;
+        if a.has_normals() || a.has_uvs() {
+            let tri = scene.mesh.indices[hit.prim as usize];
+            let s = a.at(tri, hit.u, hit.v);
+            at.uv = s.uv;
+            // A shading normal behind the surface (vertex normals bent past the face) is no
+            // use: that point is shaded flat.
+            if let Some(ns) = s.normal.filter(|ns| ns.dot(n) > 0.0) {
+                at.ns = ns;
+                let w = [1.0 - hit.u - hit.v, hit.u, hit.v];
+                let lifted: Vec3 = (0..3)
+                    .map(|k| {
+                        let (v, vn) = (scene.mesh.positions[tri[k] as usize], a.normals[tri[k] as usize]);
+                        w[k] * (p - (p - v).dot(vn) * vn)
+                    })
+                    .sum();
+                if (lifted - p).dot(n) > 0.0 && lifted.is_finite() {
+                    at.lifted = lifted;
+                }
+            }
+        }
+        Some(at)
+    }
+
+    /// A point on a flat surface (no shading normal, no texture coordinates).
+    #[inline]
+    pub fn flat(p: Vec3, err: Vec3, n: Vec3) -> SurfaceHit {
+        SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, lifted: p, prim: 0, t: 0.0 }
+    }
+
+    /// The geometric and shading normals, for the BSDF.
+    #[inline]
+    pub fn normals(&self) -> Normals {
+        Normals { geometric: self.n, shading: self.ns, lifted: self.lifted != self.p }
+    }
+
+    /// A robust origin for a ray leaving this point toward `w`: from the lifted point when `w`
+    /// leaves on the shading normal's side (so a light the smooth surface faces is not hidden
+    /// by the facet's own neighbours), else from `p`; offset off the face on `w`'s side.
     #[inline]
     pub fn spawn(&self, w: Vec3) -> Vec3 {
-        offset_ray_origin(self.p, self.err, face_forward(self.n, w))
+        let side = face_forward(self.n, w);
+        if self.lifted != self.p && self.ns.dot(w) > 0.0 {
+            // The lift's own rounding: a few ulps of the point and of the move.
+            let err = self.err + gamma(8) * (self.lifted.abs() + (self.lifted - self.p).abs());
+            return offset_ray_origin(self.lifted, err, side);
+        }
+        offset_ray_origin(self.p, self.err, side)
     }
 }

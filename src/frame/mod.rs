@@ -41,9 +41,7 @@ impl<'a, A: Accel> Frame<'a, A> {
     /// The surface point of a backend's hit (`None` on a degenerate triangle).
     #[inline]
     pub fn surface(&self, hit: Hit) -> Option<SurfaceHit> {
-        let n = self.scene.mesh.normal(hit.prim)?;
-        let (p, err) = self.scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
-        Some(SurfaceHit { p, err, n, prim: hit.prim, t: hit.t })
+        SurfaceHit::new(self.scene, hit)
     }
 }
 

@@ -5,7 +5,7 @@
 use super::{Counters, Frame, SurfaceHit};
 use crate::accel::{Accel, Hit};
 use crate::geometry::Ray;
-use crate::material::Material;
+use crate::material::{Material, TransportMode};
 use glam::Vec3;
 use rand::Rng;
 use rand_pcg::Pcg32;
@@ -67,12 +67,12 @@ pub fn walk<'s, A: Accel>(
         if depth == max_depth {
             return None;
         }
-        let s = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()])?;
-        beta *= s.weight(hit.n);
+        let s = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)?;
+        beta *= s.weight;
         if beta.max_element() <= 0.0 {
             return None;
         }
-        ray = Ray::new(hit.spawn(s.wi), s.wi);
+        ray = Ray::new(hit.spawn(s.sample.wi), s.sample.wi);
     }
     None
 }

@@ -25,6 +25,7 @@ use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::light_sample;
 use crate::frame::{Counters, Frame, Progress};
 use crate::geometry::Ray;
+use crate::material::TransportMode::Radiance;
 use crate::sampling::power_heuristic;
 use crate::stats::Stats;
 use glam::Vec3;
@@ -163,11 +164,14 @@ fn trace_radiance<A: Accel>(
         }
 
         // Continue by sampling the BSDF.
-        let Some(bs) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { break };
+        let Some(scattered) = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], Radiance) else {
+            break;
+        };
+        let bs = scattered.sample;
         if !(bs.pdf > 0.0) {
             break;
         }
-        beta *= bs.weight(hit.n);
+        beta *= scattered.weight;
         if !(beta.max_element() > 0.0) || !beta.is_finite() {
             break;
         }

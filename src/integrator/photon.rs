@@ -15,7 +15,7 @@ use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
-use crate::material::{face_forward, Material};
+use crate::material::{face_forward, Material, TransportMode};
 use crate::photon::irradiance::{Irradiance, LookupScratch, PrecomputedIrradiance, SitePoint};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
@@ -155,7 +155,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             let direct = |i: usize, site: &SitePoint| {
                 let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0xD12EC7, i as u64));
                 let mut c = Counters::default();
-                let hit = SurfaceHit { p: site.pos, err: site.err, n: site.n, prim: 0, t: 0.0 };
+                let hit = SurfaceHit::flat(site.pos, site.err, site.n);
                 let l = direct_light(self.frame, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
                 std::f32::consts::PI * l
             };
@@ -277,7 +277,7 @@ impl<A: Accel> Shading<'_, '_, A> {
             c.queries += self.maps.caustic.len() as u64;
             let (maps, g) = (&self.maps.caustic, &self.gathers.caustic);
             let nb = &mut scratch.neighbors;
-            l += c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, nb));
+            l += c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.normals(), wo, m, g, nb));
         }
         if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
             l += match self.cfg.indirect {
@@ -287,7 +287,9 @@ impl<A: Accel> Shading<'_, '_, A> {
                         c.queries += self.maps.indirect.len() as u64;
                         let (maps, g) = (&self.maps.indirect, &self.gathers.indirect);
                         let nb = &mut scratch.neighbors;
-                        c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.n, wo, m, g, nb))
+                        c.timed(Part::Gathers, || {
+                            PhotonMaps::radiance(maps, hit.p, hit.normals(), wo, m, g, nb)
+                        })
                     }
                 },
                 IndirectMode::FinalGather => self.final_gather(hit, wo, m, rng, scratch, c),
@@ -359,11 +361,15 @@ impl<A: Accel> Shading<'_, '_, A> {
         let n_rays = self.cfg.final_gather_rays;
         let mut sum = Vec3::ZERO;
         for _ in 0..n_rays {
-            let Some(s) = m.sample(hit.n, wo, rng.gen(), [rng.gen(), rng.gen()]) else { continue };
-            let start = Start::Ray(Ray::new(hit.spawn(s.wi), s.wi));
+            let Some(s) =
+                hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)
+            else {
+                continue;
+            };
+            let start = Start::Ray(Ray::new(hit.spawn(s.sample.wi), s.sample.wi));
             let count = |c: &mut Counters| c.rays.gather += 1;
             let walked =
-                walk(self.frame, start, s.weight(hit.n), self.cfg.max_depth, rng, c, count, |_, _, _, _| {});
+                walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |_, _, _, _| {});
             let Some(Landing { hit: y, wo: wy, m: my, beta }) = walked else { continue };
             let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
                 e.direct + e.indirect + e.caustic
@@ -373,10 +379,11 @@ impl<A: Accel> Shading<'_, '_, A> {
                 let nb = &mut scratch.neighbors;
                 let g = &self.gathers;
                 let (caustic, indirect) = (&self.maps.caustic, &self.maps.indirect);
-                ly += c
-                    .timed(Part::Gathers, || PhotonMaps::radiance(caustic, y.p, y.n, wy, my, &g.caustic, nb));
                 ly += c.timed(Part::Gathers, || {
-                    PhotonMaps::radiance(indirect, y.p, y.n, wy, my, &g.indirect, nb)
+                    PhotonMaps::radiance(caustic, y.p, y.normals(), wy, my, &g.caustic, nb)
+                });
+                ly += c.timed(Part::Gathers, || {
+                    PhotonMaps::radiance(indirect, y.p, y.normals(), wy, my, &g.indirect, nb)
                 });
                 ly
             };

@@ -300,7 +300,7 @@ pub(super) fn flux_within(
                 |offset, wi, power| {
                     let inside = footprint.contains(offset);
                     if inside {
-                        phi += v.m.eval(v.hit.n, v.wo, wi) * power;
+                        phi += v.hit.normals().gather_eval(v.m, v.wo, wi) * power;
                     }
                     inside
                 },

@@ -14,12 +14,13 @@
 //!
 //! Russian roulette for photons follows Jensen, "Realistic Image Synthesis Using Photon
 //! Mapping" (2001), section 5.2: see [`Material::photon_probabilities`] and
-//! [`Material::scatter_photon`].
+//! [`Normals::scatter_photon`]. Shading normals: [`Normals`].
 
 mod diffuse;
 mod glass;
 mod glossy;
 mod mirror;
+mod shading;
 #[cfg(test)]
 mod testutil;
 
@@ -27,6 +28,7 @@ pub use diffuse::DiffuseBsdf;
 pub use glass::{fresnel_dielectric, refract, GlassBsdf};
 pub use glossy::GlossyBsdf;
 pub use mirror::MirrorBsdf;
+pub use shading::{Normals, Scattered};
 
 use glam::Vec3;
 
@@ -88,7 +90,7 @@ impl BsdfSample {
     }
 }
 
-/// Result of [`Material::scatter_photon`]: the continued photon.
+/// Result of [`Normals::scatter_photon`]: the continued photon.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhotonScatter {
     pub wi: Vec3,
@@ -244,39 +246,6 @@ impl Material {
         let s = if s.is_finite() { s.clamp(0.0, 1.0 - d) } else { 0.0 };
         (d, s)
     }
-
-    /// One photon bounce with Russian roulette: `u_rr` decides diffuse-like / specular /
-    /// absorbed by [`Material::photon_probabilities`], then the surviving photon is scattered
-    /// with importance transport and its power divided by the survival probability, so the
-    /// estimate stays unbiased (`power * f |cos| / (pdf * p)`; exactly `power` for a grey
-    /// Lambertian surface with `Some(ch)`). `None` = absorbed (or no sample).
-    #[allow(clippy::too_many_arguments)]
-    pub fn scatter_photon(
-        &self,
-        n: Vec3,
-        wo: Vec3,
-        power: Vec3,
-        channel: Option<usize>,
-        u_rr: f32,
-        u_lobe: f32,
-        u: [f32; 2],
-    ) -> Option<PhotonScatter> {
-        let (p_d, p_s) = self.photon_probabilities(channel);
-        let p = if u_rr < p_d {
-            p_d
-        } else if u_rr < p_d + p_s {
-            p_s
-        } else {
-            return None;
-        };
-        let s = self.sample_mode(n, wo, u_lobe, u, TransportMode::Importance)?;
-        let power = power * s.weight(n) / p;
-        (power.is_finite() && power.max_element() > 0.0).then_some(PhotonScatter {
-            wi: s.wi,
-            power,
-            kind: s.kind,
-        })
-    }
 }
 
 #[cfg(test)]
@@ -303,12 +272,12 @@ mod tests {
         let m = Material::Diffuse { kd: Vec3::splat(0.5) };
         let n = Vec3::Z;
         let wo = Vec3::new(0.3, 0.0, 0.95).normalize();
-        let s = m.scatter_photon(n, wo, Vec3::ONE, Some(0), 0.2, 0.5, [0.3, 0.7]).unwrap();
+        let s = Normals::flat(n).scatter_photon(&m, wo, Vec3::ONE, Some(0), 0.2, 0.5, [0.3, 0.7]).unwrap();
         assert!((s.power - Vec3::ONE).abs().max_element() < 1e-5, "{:?}", s.power);
-        assert!(m.scatter_photon(n, wo, Vec3::ONE, Some(0), 0.7, 0.5, [0.3, 0.7]).is_none());
+        assert!(Normals::flat(n).scatter_photon(&m, wo, Vec3::ONE, Some(0), 0.7, 0.5, [0.3, 0.7]).is_none());
         // Glass never absorbs, and photons through it keep their power (importance transport).
         let g = Material::Glass { ior: 1.5 };
-        let s = g.scatter_photon(n, wo, Vec3::ONE, None, 0.99, 0.99, [0.0; 2]).unwrap();
+        let s = Normals::flat(n).scatter_photon(&g, wo, Vec3::ONE, None, 0.99, 0.99, [0.0; 2]).unwrap();
         assert_eq!(s.kind, LobeKind::SpecularTransmission);
         assert!((s.power - Vec3::ONE).abs().max_element() < 1e-5);
     }

@@ -15,7 +15,7 @@
 use super::kdtree::{flattened_metric, KdPoint, KdTree, Neighbor};
 use super::pack;
 use crate::config::Kernel;
-use crate::material::{face_forward, Material};
+use crate::material::{face_forward, Material, Normals};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::f32::consts::PI;
@@ -144,19 +144,20 @@ impl PhotonMap {
         }
     }
 
-    /// Reflected radiance toward `wo` at `x` (geometric normal `n`, material `m`) from this
-    /// map's photons: `sum_p w_p f(wo, wi_p) power_p / (norm * pi r^2)`. `scratch` is reused
-    /// between calls.
+    /// Reflected radiance toward `wo` at `x` (normals `normals`, material `m`) from this
+    /// map's photons: `sum_p w_p f(wo, wi_p) power_p / (norm * pi r^2)`. The BSDF is taken
+    /// about the shading normal; the disc and the side test follow the geometric one, as the
+    /// photons were stored. `scratch` is reused between calls.
     pub fn radiance(
         &self,
         x: Vec3,
-        n: Vec3,
+        normals: Normals,
         wo: Vec3,
         m: &Material,
         params: &GatherParams,
         scratch: &mut Vec<Neighbor>,
     ) -> Vec3 {
-        let ns = face_forward(n, wo);
+        let ns = face_forward(normals.geometric, wo);
         if let Some(kd) = m.lambertian() {
             // Constant BRDF: the estimate is irradiance times kd / pi.
             return self.irradiance(x, ns, params, scratch) * kd * std::f32::consts::FRAC_1_PI;
@@ -169,7 +170,7 @@ impl PhotonMap {
             let wi = pack::decode_dir_oct(p.dir);
             if wi.dot(ns) > 0.0 {
                 sum += kernel_weight(params.kernel, nb.dist2 * inv_r2)
-                    * m.eval(n, wo, wi)
+                    * normals.gather_eval(m, wo, wi)
                     * self.packed_power(p);
             }
         }
@@ -346,13 +347,13 @@ impl PhotonMaps {
     pub fn radiance(
         maps: &[PhotonMap],
         x: Vec3,
-        n: Vec3,
+        normals: Normals,
         wo: Vec3,
         m: &Material,
         params: &GatherParams,
         scratch: &mut Vec<Neighbor>,
     ) -> Vec3 {
-        maps.iter().map(|map| map.radiance(x, n, wo, m, params, scratch)).sum()
+        maps.iter().map(|map| map.radiance(x, normals, wo, m, params, scratch)).sum()
     }
 }
 
@@ -402,12 +403,20 @@ mod tests {
             let q = 50;
             for i in 0..q {
                 let x = Vec3::new(2.0 + 6.0 * (i as f32 / q as f32), 0.0, 5.0);
-                mean += map.radiance(x, Vec3::Y, Vec3::Y, &m, &params, &mut scratch) / q as f32;
+                mean +=
+                    map.radiance(x, Normals::flat(Vec3::Y), Vec3::Y, &m, &params, &mut scratch) / q as f32;
             }
             let expect = 0.03 * 0.5 / PI; // L = E kd / pi
             assert!((mean.x - expect).abs() / expect < 0.03, "{kernel:?}: {mean} vs {expect}");
             // Seen from below, nothing arrives.
-            let below = map.radiance(Vec3::new(5.0, 0.0, 5.0), Vec3::Y, -Vec3::Y, &m, &params, &mut scratch);
+            let below = map.radiance(
+                Vec3::new(5.0, 0.0, 5.0),
+                Normals::flat(Vec3::Y),
+                -Vec3::Y,
+                &m,
+                &params,
+                &mut scratch,
+            );
             assert_eq!(below, Vec3::ZERO);
         }
     }

@@ -38,8 +38,8 @@ use super::map::PhotonHit;
 use super::portal::{Outside, PortalSet};
 use crate::accel::Accel;
 use crate::config::ColorMode;
-use crate::frame::Progress;
-use crate::geometry::{offset_ray_origin, Ray};
+use crate::frame::{Progress, SurfaceHit};
+use crate::geometry::Ray;
 use crate::light::{Emitter, Light, LightSet};
 use crate::material::{face_forward, LobeKind};
 use crate::sampling::derive_seed;
@@ -537,8 +537,8 @@ fn trace_photon<A: Accel>(
             }
         }
         let Some(hit) = hit else { break };
-        let Some(n) = scene.mesh.normal(hit.prim) else { break };
-        let (p, err) = scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
+        let Some(at) = SurfaceHit::new(scene, hit) else { break };
+        let (p, err, n) = (at.p, at.err, at.n);
         let m = scene.material(hit.prim);
         let wo = -ray.dir.normalize();
         if m.is_diffuse_like() {
@@ -559,7 +559,8 @@ fn trace_photon<A: Accel>(
         if bounce == max_bounces {
             break;
         }
-        let Some(s) = m.scatter_photon(n, wo, power, channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()])
+        let Some(s) =
+            at.normals().scatter_photon(m, wo, power, channel, rng.gen(), rng.gen(), [rng.gen(), rng.gen()])
         else {
             break;
         };
@@ -567,7 +568,7 @@ fn trace_photon<A: Accel>(
             specular_only = false;
         }
         power = s.power;
-        ray = Ray::new(offset_ray_origin(p, err, face_forward(n, s.wi)), s.wi);
+        ray = Ray::new(at.spawn(s.wi), s.wi);
     }
     rays
 }
