@@ -6,7 +6,7 @@
 //!
 //! * [`geometry`] (rays, boxes, meshes, robust offsets), [`sampling`] (warps, distributions,
 //!   low-discrepancy sequences, seeds), [`choice`](mod@choice) (enums chosen by name), [`film`] (images,
-//!   EXR/PNG, error metrics), [`stats`] (what a render reports);
+//!   EXR/PNG, error metrics), [`stats`] (what a render reports), [`texture`] (image textures);
 //! * [`accel`] (ray casting: Embree, the BVH, brute force, behind one trait), [`material`],
 //!   [`light`] (the lights and the [`light::LightSet`] renders sample), [`config`] (settings
 //!   resolved into a per-integrator config), [`scene`] (TOML scene files with OBJ/MTL
@@ -39,4 +39,5 @@ pub mod photon;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod texture;
 pub mod tools;

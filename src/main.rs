@@ -84,7 +84,7 @@ fn install_interrupt_handler(progressive: bool) -> Result<()> {
 fn render(args: cli::RenderArgs) -> Result<Finished> {
     let wall = Instant::now();
     let mut stats = Stats::default();
-    let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| Scene::load(&args.scene))?;
+    let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| load_scene(&args.scene))?;
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let frames = match &args.frames {
         Some(list) => Some(
@@ -223,7 +223,7 @@ fn check_output_dirs<'a>(paths: impl IntoIterator<Item = &'a PathBuf>) -> Result
 }
 
 fn agree(args: cli::AgreeArgs) -> Result<()> {
-    let scene = Scene::load(&args.scene)?;
+    let scene = load_scene(&args.scene)?;
     let options = AccelOptions { robust: args.robust };
     let report = photonmap::tools::agree::agree_scene(&scene, args.rays, args.seed, options)?;
     if args.json {
@@ -300,7 +300,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     use photonmap::choice::Choice;
     use photonmap::film::Film;
     use photonmap::tools::converge::{self, Method, Study};
-    let scene = Scene::load(&args.scene)?;
+    let scene = load_scene(&args.scene)?;
     let mut reference = match (&args.reference, args.exact) {
         (Some(path), _) => Film::read_exr(path)?,
         (None, Some(v)) => exact_film(v, scene.camera.width as usize, scene.camera.height as usize)?,
@@ -403,7 +403,7 @@ fn stress(args: cli::StressArgs) -> Result<()> {
 
 fn bench(args: cli::BenchArgs) -> Result<()> {
     use photonmap::tools::bench::{self, BenchSpec};
-    let scene = Scene::load(&args.scene)?;
+    let scene = load_scene(&args.scene)?;
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let cfg = settings
         .resolve(args.width, args.height)
@@ -430,7 +430,7 @@ fn bench(args: cli::BenchArgs) -> Result<()> {
 }
 
 fn info(path: &std::path::Path) -> Result<()> {
-    let scene = Scene::load(path)?;
+    let scene = load_scene(path)?;
     let b = scene.bounds();
     println!("scene      {}", path.display());
     println!("triangles  {}", scene.mesh.len());
@@ -469,4 +469,13 @@ fn info(path: &std::path::Path) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Loads a scene, saying on stderr what it asks for that is not rendered as asked.
+fn load_scene(path: &std::path::Path) -> Result<Scene, photonmap::scene::SceneError> {
+    let scene = Scene::load(path)?;
+    for w in &scene.warnings {
+        eprintln!("photonmap: warning: {w}");
+    }
+    Ok(scene)
 }

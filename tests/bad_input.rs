@@ -66,6 +66,22 @@ fn cases() -> Vec<Case> {
             ..case("NaN coordinate", &["cornell.obj:13:", "not finite"])
         },
         Case {
+            edits: &[("cornell.mtl", "Kd 0.63 0.065 0.05\n", "Kd 0.63 0.065 0.05\nmap_Kd nosuch.png\n")],
+            ..case("missing texture", &["cornell.mtl:13:", "nosuch.png"])
+        },
+        Case {
+            edits: &[("cornell.mtl", "Kd 0.63 0.065 0.05\n", "Kd 0.63 0.065 0.05\nmap_Kd cornell.obj\n")],
+            ..case("texture that is not an image", &["cornell.mtl:13:", "cornell.obj", "not an image"])
+        },
+        Case {
+            edits: &[("cornell.mtl", "Kd 0.63 0.065 0.05\n", "Kd 0.63 0.065 0.05\nmap_Kd -q 1 red.png\n")],
+            ..case("unknown texture option", &["cornell.mtl:13:", "unknown option `-q`"])
+        },
+        Case {
+            edits: &[("cornell.toml", "[materials.red]\n", "[materials.red]\nkd_texture = \"gone.png\"\n")],
+            ..case("missing scene-file texture", &["cornell.toml", "materials.red.kd_texture", "gone.png"])
+        },
+        Case {
             edits: &[("cornell.toml", "width = 256", "width = 256\nfocal_length = 35")],
             ..case("unknown TOML key", &["cornell.toml", "line 12", "unknown field `focal_length`"])
         },

@@ -12,11 +12,12 @@ use rand_pcg::Pcg32;
 
 /// The first diffuse or glossy surface a walk reaches.
 #[derive(Clone, Copy, Debug)]
-pub struct Landing<'m> {
+pub struct Landing {
     pub hit: SurfaceHit,
     /// Unit direction back along the ray that arrived.
     pub wo: Vec3,
-    pub m: &'m Material,
+    /// The material there, its textures looked up.
+    pub m: Material,
     /// Throughput of the specular bounces behind it.
     pub beta: Vec3,
 }
@@ -44,7 +45,7 @@ pub fn walk<'s, A: Accel>(
     c: &mut Counters,
     count: fn(&mut Counters),
     mut visit: impl FnMut(&SurfaceHit, Vec3, &Material, Vec3),
-) -> Option<Landing<'s>> {
+) -> Option<Landing> {
     let (mut ray, mut first) = match start {
         Start::Traced(ray, hit) => (ray, Some(hit)),
         Start::Ray(ray) => (ray, None),
@@ -58,16 +59,16 @@ pub fn walk<'s, A: Accel>(
             }
         };
         let hit = hit?;
-        let m = frame.scene.material(hit.prim);
+        let m = frame.scene.material_at(hit.prim, hit.uv);
         let wo = -ray.dir.normalize();
-        visit(&hit, wo, m, beta);
+        visit(&hit, wo, &m, beta);
         if !m.is_specular() {
             return Some(Landing { hit, wo, m, beta });
         }
         if depth == max_depth {
             return None;
         }
-        let s = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)?;
+        let s = hit.normals().sample(&m, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)?;
         beta *= s.weight;
         if beta.max_element() <= 0.0 {
             return None;

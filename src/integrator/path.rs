@@ -141,7 +141,7 @@ fn trace_radiance<A: Accel>(
             s.trace(&ray, c)
         };
         let Some(hit) = hit else { break };
-        let m = s.scene.material(hit.prim);
+        let m = &s.scene.material_at(hit.prim, hit.uv);
         let wo = -ray.dir.normalize();
 
         // Emission reached by the camera ray or by the previous vertex's BSDF sample.

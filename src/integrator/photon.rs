@@ -253,7 +253,7 @@ impl<A: Accel> Shading<'_, '_, A> {
                 }
             });
         if let Some(v) = landing {
-            l += v.beta * self.shade(&v.hit, v.wo, v.m, rng, scratch, c);
+            l += v.beta * self.shade(&v.hit, v.wo, &v.m, rng, scratch, c);
         }
         l
     }
@@ -370,7 +370,7 @@ impl<A: Accel> Shading<'_, '_, A> {
             let count = |c: &mut Counters| c.rays.gather += 1;
             let walked =
                 walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |_, _, _, _| {});
-            let Some(Landing { hit: y, wo: wy, m: my, beta }) = walked else { continue };
+            let Some(Landing { hit: y, wo: wy, m: ref my, beta }) = walked else { continue };
             let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
                 e.direct + e.indirect + e.caustic
             } else {

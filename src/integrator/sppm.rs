@@ -182,7 +182,7 @@ fn trace_camera<A: Accel>(
         l += beta * m.emitted(hit.n, wo)
     });
     if let Some(v) = &landing {
-        l += v.beta * direct_light(frame, &v.hit, v.wo, v.m, cfg.light_samples, rng, c);
+        l += v.beta * direct_light(frame, &v.hit, v.wo, &v.m, cfg.light_samples, rng, c);
     }
     l
 }
@@ -197,7 +197,7 @@ pub(super) fn visible_point<'s, A: Accel>(
     y: u32,
     rng: &mut Pcg32,
     c: &mut Counters,
-) -> Option<Landing<'s>> {
+) -> Option<Landing> {
     let ray = frame.visible_point_ray(&pass.samples, pass.index, x, y);
     c.rays.camera += 1;
     let hit = c.timed(Part::Rays, || frame.accel.intersect(&ray));
@@ -214,7 +214,7 @@ fn gather<A: Accel>(
     maps: &PhotonMaps,
     gathers: &GatherPair,
     st: &mut PixelState,
-    v: &Landing<'_>,
+    v: &Landing,
     alpha: f32,
     nb: &mut Vec<Neighbor>,
     rng: &mut Pcg32,
@@ -283,7 +283,7 @@ pub(super) fn first_radius2(
 pub(super) fn flux_within(
     maps: &PhotonMaps,
     gathers: &GatherPair,
-    v: &Landing<'_>,
+    v: &Landing,
     ns: Vec3,
     footprint: &Footprint,
     c: &mut Counters,
@@ -300,7 +300,7 @@ pub(super) fn flux_within(
                 |offset, wi, power| {
                     let inside = footprint.contains(offset);
                     if inside {
-                        phi += v.hit.normals().gather_eval(v.m, v.wo, wi) * power;
+                        phi += v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
                     }
                     inside
                 },

@@ -140,6 +140,10 @@ pub struct MaterialEntry {
     pub ns: Option<f32>,
     pub ior: Option<f32>,
     pub ke: Option<[f32; 3]>,
+    /// An image for `kd` (relative to the scene file), replacing the MTL's `map_Kd`.
+    pub kd_texture: Option<std::path::PathBuf>,
+    /// An image for `ks`, replacing the MTL's `map_Ks`.
+    pub ks_texture: Option<std::path::PathBuf>,
 }
 
 /// `[[portal]]`: an opening distant lights send their photons through (see

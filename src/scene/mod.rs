@@ -8,6 +8,7 @@ mod camera;
 mod cameras;
 mod error;
 mod file;
+mod materials;
 mod obj;
 mod transform;
 
@@ -16,14 +17,16 @@ pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
 };
-pub use obj::MtlMaterial;
+pub use materials::{MaterialMaps, TextureRef};
+pub use obj::{MtlMap, MtlMaterial};
 
 use crate::config::RenderSettings;
 use crate::geometry::{Aabb, TriangleMesh, VertexAttributes};
 use crate::light::{LightDesc, Portal};
 use crate::material::Material;
-use file::{finite3, nonneg3, reflectance3};
-use glam::Vec3;
+use crate::texture::Textures;
+use file::{finite3, nonneg3};
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -41,7 +44,15 @@ pub struct Scene {
     /// Material index of each triangle.
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
+    /// Each material's texture maps (indexed like `materials`).
+    pub maps: Vec<MaterialMaps>,
+    /// Whether any material has a texture (if not, [`Scene::material_at`] is a lookup).
+    pub textured: bool,
+    pub textures: Textures,
     pub material_names: Vec<String>,
+    /// What the scene asks for that is not rendered as asked, each said once (the command
+    /// line prints them).
+    pub warnings: Vec<String>,
     pub lights: Vec<LightDesc>,
     /// Openings distant lights send their photons through (`[[portal]]`).
     pub portals: Vec<Portal>,
@@ -102,7 +113,13 @@ impl Scene {
         attributes
             .validate(mesh.positions.len())
             .map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
-        let (tri_material, materials, material_names) = resolve_materials(path, &tri_names, &mtl, &file)?;
+        let resolved = materials::resolve(path, &tri_names, &mtl, &file)?;
+        let mut warnings = resolved.warnings;
+        if !resolved.textures.is_empty() && !attributes.has_uvs() {
+            warnings.push(
+                "textures are used but no mesh has texture coordinates (vt): each shows one colour".into(),
+            );
+        }
         let lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
         let portals =
@@ -114,9 +131,13 @@ impl Scene {
             cameras,
             mesh,
             attributes,
-            tri_material,
-            materials,
-            material_names,
+            tri_material: resolved.tri_material,
+            materials: resolved.materials,
+            maps: resolved.maps,
+            textured: !resolved.textures.is_empty(),
+            textures: resolved.textures,
+            material_names: resolved.names,
+            warnings,
             lights,
             portals,
             render: file.render,
@@ -162,10 +183,27 @@ impl Scene {
         Some(s)
     }
 
-    /// The material of triangle `prim`.
+    /// The material of triangle `prim`, untextured (its kind and constants as the files give
+    /// them).
     #[inline]
     pub fn material(&self, prim: u32) -> &Material {
         &self.materials[self.tri_material[prim as usize] as usize]
+    }
+
+    /// The material of triangle `prim` at texture coordinates `uv`, its textures looked up.
+    #[inline]
+    pub fn material_at(&self, prim: u32, uv: Vec2) -> Material {
+        let id = self.tri_material[prim as usize] as usize;
+        let m = self.materials[id];
+        if !self.textured {
+            return m;
+        }
+        let maps = &self.maps[id];
+        if maps.is_empty() {
+            m
+        } else {
+            maps.apply(m, &self.textures, uv)
+        }
     }
 
     /// How many triangles use each material (by index: two materials with equal values are
@@ -176,114 +214,6 @@ impl Scene {
             count[m as usize] += 1;
         }
         count
-    }
-}
-
-/// Per-triangle material indices, the materials, and their names.
-type Resolved = (Vec<u32>, Vec<Material>, Vec<String>);
-
-/// Resolves every triangle's material name to an index, merging MTL materials with the scene
-/// file's `[materials.NAME]` entries (the file wins, field by field).
-fn resolve_materials(
-    path: &Path,
-    tri_names: &[Option<String>],
-    mtl: &HashMap<String, MtlMaterial>,
-    file: &SceneFile,
-) -> Result<Resolved, SceneError> {
-    let mut index: HashMap<Option<&str>, u32> = HashMap::new();
-    let mut materials = Vec::new();
-    let mut names = Vec::new();
-    let mut tri_material = Vec::with_capacity(tri_names.len());
-    for name in tri_names {
-        let key = name.as_deref();
-        let id = match index.get(&key) {
-            Some(&id) => id,
-            None => {
-                let m = match key {
-                    None => Material::Diffuse { kd: Vec3::splat(0.8) },
-                    Some(n) => material(path, n, mtl.get(n), file.materials.get(n))?,
-                };
-                let id = materials.len() as u32;
-                materials.push(m);
-                names.push(key.unwrap_or("(default grey)").to_owned());
-                index.insert(key, id);
-                id
-            }
-        };
-        tri_material.push(id);
-    }
-    Ok((tri_material, materials, names))
-}
-
-/// One material from its MTL entry and/or scene-file entry.
-fn material(
-    path: &Path,
-    name: &str,
-    mtl: Option<&MtlMaterial>,
-    entry: Option<&MaterialEntry>,
-) -> Result<Material, SceneError> {
-    if mtl.is_none() && entry.is_none() {
-        return Err(SceneError::field(
-            path,
-            format!("materials.{name}"),
-            "used by the mesh but defined neither in its MTL nor in the scene file",
-        ));
-    }
-    let empty = MtlMaterial::default();
-    let mtl = mtl.unwrap_or(&empty);
-    let none = MaterialEntry::default();
-    let e = entry.unwrap_or(&none);
-    let field = |f: &str| format!("materials.{name}.{f}");
-    let kd = e.kd.or(mtl.kd).unwrap_or([0.0; 3]);
-    let ks = e.ks.or(mtl.ks).unwrap_or([0.0; 3]);
-    let ke = e.ke.or(mtl.ke).unwrap_or([0.0; 3]);
-    let kind = e.kind.unwrap_or_else(|| mtl_kind(mtl));
-    let m = match kind {
-        MaterialKind::Diffuse => Material::Diffuse { kd: reflectance3(path, &field("kd"), kd)? },
-        MaterialKind::Glossy => {
-            let kd = reflectance3(path, &field("kd"), kd)?;
-            let ks = reflectance3(path, &field("ks"), ks)?;
-            if (kd + ks).max_element() > 1.0 {
-                return Err(SceneError::field(path, field("ks"), "kd + ks exceeds 1: not energy conserving"));
-            }
-            let ns =
-                e.ns.or(mtl.ns).ok_or_else(|| SceneError::field(path, field("ns"), "glossy needs ns"))?;
-            if !(0.0..=1e6).contains(&ns) {
-                return Err(SceneError::field(path, field("ns"), format!("{ns} is not in [0, 1e6]")));
-            }
-            Material::Glossy { kd, ks, ns }
-        }
-        MaterialKind::Mirror => {
-            let ks = if e.ks.is_none() && mtl.ks.is_none() { [1.0; 3] } else { ks };
-            Material::Mirror { ks: reflectance3(path, &field("ks"), ks)? }
-        }
-        MaterialKind::Glass => {
-            let ior = e.ior.or(mtl.ni).unwrap_or(1.5);
-            if !(ior.is_finite() && ior > 0.0 && ior < 100.0) {
-                return Err(SceneError::field(path, field("ior"), format!("{ior} is not in (0, 100)")));
-            }
-            Material::Glass { ior }
-        }
-        MaterialKind::Emissive => Material::Emissive {
-            kd: reflectance3(path, &field("kd"), kd)?,
-            ke: nonneg3(path, &field("ke"), ke)?,
-        },
-    };
-    Ok(m)
-}
-
-/// The MTL mapping: `Ke` → emissive; `illum 3/5` → mirror; `illum 4/6/7` → glass; `illum 2`
-/// with `Ks` and `Ns` → glossy; otherwise diffuse.
-fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
-    let nonzero = |v: Option<[f32; 3]>| v.is_some_and(|v| v.iter().any(|&x| x > 0.0));
-    if nonzero(m.ke) {
-        return MaterialKind::Emissive;
-    }
-    match m.illum {
-        Some(3) | Some(5) => MaterialKind::Mirror,
-        Some(4) | Some(6) | Some(7) => MaterialKind::Glass,
-        Some(2) if nonzero(m.ks) && m.ns.is_some() => MaterialKind::Glossy,
-        _ => MaterialKind::Diffuse,
     }
 }
 

@@ -17,6 +17,28 @@ pub struct MtlMaterial {
     pub ns: Option<f32>,
     pub ni: Option<f32>,
     pub illum: Option<u8>,
+    /// The texture maps (`map_Kd`, `bump`, ...) in file order.
+    pub maps: Vec<MtlMap>,
+}
+
+/// One texture statement of an MTL file: `map_Kd -s 2 2 wood.png`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MtlMap {
+    /// The statement's keyword, lower-cased (`map_kd`, `map_bump`, `bump`, `norm`, ...).
+    pub keyword: String,
+    /// The image, relative to the MTL file's directory as written.
+    pub file: PathBuf,
+    /// Where the statement is, for messages.
+    pub mtl: PathBuf,
+    pub line: usize,
+    /// `-s u v`: texture coordinates are scaled by this (default 1).
+    pub scale: Vec2,
+    /// `-o u v`: then offset by this (default 0).
+    pub offset: Vec2,
+    /// `-clamp on`.
+    pub clamp: bool,
+    /// Options read but not applied (`-bm`, `-mm`, ...), by name.
+    pub ignored: Vec<String>,
 }
 
 /// An OBJ file's triangles with, per triangle, the name of its material (if any).
@@ -42,7 +64,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
     for (name, line) in &parsed.libraries {
         let mtl_path = dir.join(name);
         let t = read(&mtl_path)?;
-        check_mtl(&mtl_path, &t)?;
+        let mut maps = check_mtl(&mtl_path, &t)?;
         let (loaded, _) = tobj::load_mtl_buf(&mut t.as_bytes()).map_err(|e| {
             SceneError::line(path, *line, format!("material library `{name}` could not be read: {e}"))
         })?;
@@ -54,6 +76,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 ns: m.shininess,
                 ni: m.optical_density,
                 illum: m.illumination_model,
+                maps: maps.remove(&m.name).unwrap_or_default(),
             };
             if !materials.iter().any(|(n, _)| *n == m.name) {
                 materials.push((m.name, mtl));
@@ -303,7 +326,11 @@ fn reference(r: &str, counts: [usize; 3]) -> Result<[u32; 3], String> {
 }
 
 /// Checks the numeric MTL statements the renderer uses.
-fn check_mtl(path: &Path, text: &str) -> Result<(), SceneError> {
+/// Texture statements are read here too: `map_Kd`, `map_Ks`, `map_Ke`, `map_d`, `map_Ns`,
+/// `map_Ka`, `bump`/`map_Bump`, `norm`, `disp`, `decal`, `refl`, each with its options, per
+/// material.
+fn check_mtl(path: &Path, text: &str) -> Result<HashMap<String, Vec<MtlMap>>, SceneError> {
+    let mut maps: HashMap<String, Vec<MtlMap>> = HashMap::new();
     let mut current: Option<String> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -324,6 +351,14 @@ fn check_mtl(path: &Path, text: &str) -> Result<(), SceneError> {
             }
             "Kd" | "Ks" | "Ke" | "Ka" | "Tf" => 3,
             "Ns" | "Ni" | "d" | "Tr" | "illum" => 1,
+            k if is_map(k) => {
+                let Some(name) = &current else {
+                    return Err(SceneError::line(path, line, format!("`{keyword}` before any newmtl")));
+                };
+                let map = parse_map(path, line, keyword, &args)?;
+                maps.entry(name.clone()).or_default().push(map);
+                continue;
+            }
             _ => continue,
         };
         if current.is_none() {
@@ -352,7 +387,87 @@ fn check_mtl(path: &Path, text: &str) -> Result<(), SceneError> {
             }
         }
     }
-    Ok(())
+    Ok(maps)
+}
+
+/// Whether an MTL keyword names a texture map.
+fn is_map(keyword: &str) -> bool {
+    let k = keyword.to_ascii_lowercase();
+    k.starts_with("map_") || matches!(k.as_str(), "bump" | "norm" | "disp" | "decal" | "refl")
+}
+
+/// A texture statement's options and file name (the rest of the line: it may hold spaces).
+fn parse_map(path: &Path, line: usize, keyword: &str, args: &[&str]) -> Result<MtlMap, SceneError> {
+    let bad = |m: String| SceneError::line(path, line, format!("`{keyword}`: {m}"));
+    let mut map = MtlMap {
+        keyword: keyword.to_ascii_lowercase(),
+        file: PathBuf::new(),
+        mtl: path.to_owned(),
+        line,
+        scale: Vec2::ONE,
+        offset: Vec2::ZERO,
+        clamp: false,
+        ignored: Vec::new(),
+    };
+    let mut i = 0;
+    while i < args.len() && args[i].starts_with('-') && args[i].len() > 1 {
+        let option = args[i];
+        // How many values each option takes (up to, for -s/-o/-t: 1 to 3 numbers).
+        let (min, max) = match option {
+            "-s" | "-o" | "-t" => (1, 3),
+            "-mm" => (2, 2),
+            "-bm" | "-boost" | "-texres" => (1, 1),
+            "-blendu" | "-blendv" | "-clamp" | "-cc" | "-imfchan" | "-type" => (1, 1),
+            _ => return Err(bad(format!("unknown option `{option}`"))),
+        };
+        let mut values = Vec::new();
+        while values.len() < max && i + 1 + values.len() < args.len() {
+            let v = args[i + 1 + values.len()];
+            let numeric = v.parse::<f32>().is_ok();
+            if (min == max && values.len() < min) || numeric {
+                values.push(v);
+            } else {
+                break;
+            }
+        }
+        if values.len() < min {
+            return Err(bad(format!("option `{option}` needs {min} value(s)")));
+        }
+        let numbers = || -> Result<Vec<f32>, SceneError> {
+            values
+                .iter()
+                .map(|v| {
+                    v.parse::<f32>()
+                        .ok()
+                        .filter(|x| x.is_finite())
+                        .ok_or_else(|| bad(format!("option `{option}`: `{v}` is not a finite number")))
+                })
+                .collect()
+        };
+        match option {
+            "-s" => {
+                let n = numbers()?;
+                map.scale = Vec2::new(n[0], *n.get(1).unwrap_or(&n[0]));
+            }
+            "-o" => {
+                let n = numbers()?;
+                map.offset = Vec2::new(n[0], *n.get(1).unwrap_or(&0.0));
+            }
+            "-clamp" => match values[0] {
+                "on" => map.clamp = true,
+                "off" => map.clamp = false,
+                v => return Err(bad(format!("option `-clamp`: `{v}` is neither on nor off"))),
+            },
+            _ => map.ignored.push(option.to_owned()),
+        }
+        i += 1 + values.len();
+    }
+    let file = args[i.min(args.len())..].join(" ");
+    if file.is_empty() {
+        return Err(bad("needs an image file name".into()));
+    }
+    map.file = PathBuf::from(file);
+    Ok(map)
 }
 
 /// Resolves `name` relative to the directory of `base`.

@@ -1,0 +1,264 @@
+//! Materials: each triangle's material name resolved to a [`Material`], from its MTL entry
+//! and the scene file's `[materials.NAME]` (the file wins, field by field), with the texture
+//! maps that vary it over the surface ([`MaterialMaps`]).
+
+use super::file::{nonneg3, reflectance3, MaterialEntry, MaterialKind, SceneFile};
+use super::obj::{relative_to, MtlMap, MtlMaterial};
+use super::SceneError;
+use crate::material::Material;
+use crate::texture::{Textures, Wrap};
+use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// What material resolution gives the scene.
+pub struct Resolved {
+    /// Material index of each triangle.
+    pub tri_material: Vec<u32>,
+    pub materials: Vec<Material>,
+    /// Each material's textures (indexed like `materials`).
+    pub maps: Vec<MaterialMaps>,
+    pub names: Vec<String>,
+    pub textures: Textures,
+    /// What the scene asks for that is not rendered, said once each.
+    pub warnings: Vec<String>,
+}
+
+/// Resolves every triangle's material name to an index, merging MTL materials with the scene
+/// file's `[materials.NAME]` entries (the file wins, field by field).
+pub fn resolve(
+    path: &Path,
+    tri_names: &[Option<String>],
+    mtl: &HashMap<String, MtlMaterial>,
+    file: &SceneFile,
+) -> Result<Resolved, SceneError> {
+    let mut index: HashMap<Option<&str>, u32> = HashMap::new();
+    let mut materials = Vec::new();
+    let mut maps = Vec::new();
+    let mut names = Vec::new();
+    let mut textures = Textures::default();
+    let mut warnings = Vec::new();
+    let mut tri_material = Vec::with_capacity(tri_names.len());
+    for name in tri_names {
+        let key = name.as_deref();
+        let id = match index.get(&key) {
+            Some(&id) => id,
+            None => {
+                let (m, textured) = match key {
+                    None => (Material::Diffuse { kd: Vec3::splat(0.8) }, MaterialMaps::default()),
+                    Some(n) => {
+                        let (m, e) = (mtl.get(n), file.materials.get(n));
+                        let material = material(path, n, m, e)?;
+                        let textured = texture_maps(path, n, &material, m, e, &mut textures, &mut warnings)?;
+                        (material, textured)
+                    }
+                };
+                let id = materials.len() as u32;
+                materials.push(m);
+                maps.push(textured);
+                names.push(key.unwrap_or("(default grey)").to_owned());
+                index.insert(key, id);
+                id
+            }
+        };
+        tri_material.push(id);
+    }
+    Ok(Resolved { tri_material, materials, maps, names, textures, warnings })
+}
+
+/// One material from its MTL entry and/or scene-file entry.
+fn material(
+    path: &Path,
+    name: &str,
+    mtl: Option<&MtlMaterial>,
+    entry: Option<&MaterialEntry>,
+) -> Result<Material, SceneError> {
+    if mtl.is_none() && entry.is_none() {
+        return Err(SceneError::field(
+            path,
+            format!("materials.{name}"),
+            "used by the mesh but defined neither in its MTL nor in the scene file",
+        ));
+    }
+    let empty = MtlMaterial::default();
+    let mtl = mtl.unwrap_or(&empty);
+    let none = MaterialEntry::default();
+    let e = entry.unwrap_or(&none);
+    let field = |f: &str| format!("materials.{name}.{f}");
+    let kd = e.kd.or(mtl.kd).unwrap_or([0.0; 3]);
+    let ks = e.ks.or(mtl.ks).unwrap_or([0.0; 3]);
+    let ke = e.ke.or(mtl.ke).unwrap_or([0.0; 3]);
+    let kind = e.kind.unwrap_or_else(|| mtl_kind(mtl));
+    let m = match kind {
+        MaterialKind::Diffuse => Material::Diffuse { kd: reflectance3(path, &field("kd"), kd)? },
+        MaterialKind::Glossy => {
+            let kd = reflectance3(path, &field("kd"), kd)?;
+            let ks = reflectance3(path, &field("ks"), ks)?;
+            if (kd + ks).max_element() > 1.0 {
+                return Err(SceneError::field(path, field("ks"), "kd + ks exceeds 1: not energy conserving"));
+            }
+            let ns =
+                e.ns.or(mtl.ns).ok_or_else(|| SceneError::field(path, field("ns"), "glossy needs ns"))?;
+            if !(0.0..=1e6).contains(&ns) {
+                return Err(SceneError::field(path, field("ns"), format!("{ns} is not in [0, 1e6]")));
+            }
+            Material::Glossy { kd, ks, ns }
+        }
+        MaterialKind::Mirror => {
+            let ks = if e.ks.is_none() && mtl.ks.is_none() { [1.0; 3] } else { ks };
+            Material::Mirror { ks: reflectance3(path, &field("ks"), ks)? }
+        }
+        MaterialKind::Glass => {
+            let ior = e.ior.or(mtl.ni).unwrap_or(1.5);
+            if !(ior.is_finite() && ior > 0.0 && ior < 100.0) {
+                return Err(SceneError::field(path, field("ior"), format!("{ior} is not in (0, 100)")));
+            }
+            Material::Glass { ior }
+        }
+        MaterialKind::Emissive => Material::Emissive {
+            kd: reflectance3(path, &field("kd"), kd)?,
+            ke: nonneg3(path, &field("ke"), ke)?,
+        },
+    };
+    Ok(m)
+}
+
+/// The MTL mapping: `Ke` → emissive; `illum 3/5` → mirror; `illum 4/6/7` → glass; `illum 2`
+/// with `Ks` and `Ns` → glossy; otherwise diffuse.
+fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
+    let nonzero = |v: Option<[f32; 3]>| v.is_some_and(|v| v.iter().any(|&x| x > 0.0));
+    if nonzero(m.ke) {
+        return MaterialKind::Emissive;
+    }
+    match m.illum {
+        Some(3) | Some(5) => MaterialKind::Mirror,
+        Some(4) | Some(6) | Some(7) => MaterialKind::Glass,
+        Some(2) if nonzero(m.ks) && m.ns.is_some() => MaterialKind::Glossy,
+        _ => MaterialKind::Diffuse,
+    }
+}
+
+/// One texture as a material uses it: the image, the transform of the texture coordinates
+/// (`uv * scale + offset`, MTL's `-s` and `-o`) and what happens outside `[0, 1)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    pub texture: u32,
+    pub scale: Vec2,
+    pub offset: Vec2,
+    pub wrap: Wrap,
+}
+
+impl TextureRef {
+    /// Linear RGB at `uv`.
+    #[inline]
+    pub fn rgb(&self, textures: &Textures, uv: Vec2) -> Vec3 {
+        textures.get(self.texture).sample(uv * self.scale + self.offset, self.wrap).truncate()
+    }
+}
+
+/// The textures of one material: each replaces the constant it is named after (an MTL
+/// `map_Kd` is the diffuse colour, whatever `Kd` says, as Blender and 3ds Max read it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct MaterialMaps {
+    /// `map_Kd` / `kd_texture`: the diffuse albedo of diffuse, glossy and emissive materials.
+    pub kd: Option<TextureRef>,
+    /// `map_Ks` / `ks_texture`: the specular albedo of glossy materials and mirrors.
+    pub ks: Option<TextureRef>,
+}
+
+impl MaterialMaps {
+    pub fn is_empty(&self) -> bool {
+        self.kd.is_none() && self.ks.is_none()
+    }
+
+    /// `m` with its textured constants looked up at `uv`. Albedos are clamped to `[0, 1]`, and
+    /// a glossy material's `kd + ks` scaled down to 1 where a texture pushes it past.
+    #[inline]
+    pub fn apply(&self, m: Material, textures: &Textures, uv: Vec2) -> Material {
+        let albedo = |t: Option<TextureRef>, c: Vec3| {
+            t.map_or(c, |t| t.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE))
+        };
+        match m {
+            Material::Diffuse { kd } => Material::Diffuse { kd: albedo(self.kd, kd) },
+            Material::Emissive { kd, ke } => Material::Emissive { kd: albedo(self.kd, kd), ke },
+            Material::Glossy { kd, ks, ns } => {
+                let (kd, ks) = (albedo(self.kd, kd), albedo(self.ks, ks));
+                let over = (kd + ks).max(Vec3::ONE);
+                Material::Glossy { kd: kd / over, ks: ks / over, ns }
+            }
+            Material::Mirror { ks } => Material::Mirror { ks: albedo(self.ks, ks) },
+            Material::Glass { .. } => m,
+        }
+    }
+}
+
+/// The texture maps of material `name`: the scene file's `kd_texture`/`ks_texture` (relative
+/// to the scene file) over the MTL's `map_Kd`/`map_Ks`. Maps the material cannot use, and
+/// the MTL maps not rendered yet, are named in `warnings`.
+fn texture_maps(
+    path: &Path,
+    name: &str,
+    m: &Material,
+    mtl: Option<&MtlMaterial>,
+    entry: Option<&MaterialEntry>,
+    textures: &mut Textures,
+    warnings: &mut Vec<String>,
+) -> Result<MaterialMaps, SceneError> {
+    let mut maps = MaterialMaps::default();
+    let from_mtl = |map: &MtlMap,
+                    textures: &mut Textures,
+                    warnings: &mut Vec<String>|
+     -> Result<TextureRef, SceneError> {
+        let file = relative_to(&map.mtl, &map.file);
+        let texture = textures.get_or_load(&file).map_err(|e| SceneError::line(&map.mtl, map.line, e))?;
+        if !map.ignored.is_empty() {
+            warnings.push(format!(
+                "{}:{}: {} options {} are not applied",
+                map.mtl.display(),
+                map.line,
+                map.keyword,
+                map.ignored.join(", ")
+            ));
+        }
+        let wrap = if map.clamp { Wrap::Clamp } else { Wrap::Repeat };
+        Ok(TextureRef { texture, scale: map.scale, offset: map.offset, wrap })
+    };
+    for map in mtl.map_or(&[][..], |m| &m.maps[..]) {
+        match map.keyword.as_str() {
+            "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings)?),
+            "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings)?),
+            other => warnings.push(format!(
+                "{}:{}: `{other}` (material {name}) is not rendered yet; the material is drawn without it",
+                map.mtl.display(),
+                map.line
+            )),
+        }
+    }
+    let from_file = |field: &str, file: &Path, textures: &mut Textures| -> Result<TextureRef, SceneError> {
+        let texture = textures
+            .get_or_load(&relative_to(path, file))
+            .map_err(|e| SceneError::field(path, format!("materials.{name}.{field}"), e))?;
+        Ok(TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap: Wrap::Repeat })
+    };
+    if let Some(e) = entry {
+        if let Some(f) = &e.kd_texture {
+            maps.kd = Some(from_file("kd_texture", f, textures)?);
+        }
+        if let Some(f) = &e.ks_texture {
+            maps.ks = Some(from_file("ks_texture", f, textures)?);
+        }
+    }
+    let uses_kd = matches!(m, Material::Diffuse { .. } | Material::Glossy { .. } | Material::Emissive { .. });
+    let uses_ks = matches!(m, Material::Glossy { .. } | Material::Mirror { .. });
+    let kind = format!("{m:?}");
+    let kind = kind.split_whitespace().next().unwrap_or("").to_lowercase();
+    if maps.kd.is_some() && !uses_kd {
+        warnings.push(format!("material {name}: a {kind} material has no kd; its kd texture is not used"));
+        maps.kd = None;
+    }
+    if maps.ks.is_some() && !uses_ks {
+        warnings.push(format!("material {name}: a {kind} material has no ks; its ks texture is not used"));
+        maps.ks = None;
+    }
+    Ok(maps)
+}

@@ -1,0 +1,203 @@
+//! Textures from MTL `map_Kd`/`map_Ks` and the scene file's `kd_texture`: the analytic checks
+//! of the real-scenes issue.
+//!
+//! - A constant texture gives the image of the constant, bit for bit: an EXR of 0.5 on the
+//!   white furnace is the furnace of `kd = 0.5` (exactly 2.0), and an 8-bit PNG is decoded
+//!   from sRGB to the `kd` its value stands for.
+//! - Photons read the textures too: a box with a textured wall bleeds the texture's colour onto
+//!   the floor as the path tracer sees it.
+
+#[allow(dead_code)]
+mod common;
+
+use common::render_checked;
+use glam::Vec3;
+use photonmap::config::{IntegratorKind, RenderSettings};
+use photonmap::film::Film;
+use photonmap::scene::Scene;
+use std::fmt::Write;
+use std::path::Path;
+
+/// The cube `[-1, 1]^3` as OBJ text, faces wound inward, each face's corners at texture
+/// coordinates (0,0) (1,0) (1,1) (0,1), all of material `m`.
+fn cube_obj(mtllib: &str, m: &str) -> String {
+    let mut s = format!("mtllib {mtllib}\nusemtl {m}\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+    // Each face: an axis, a side, and two tangent axes wound so the normal points inward.
+    let mut v = 0;
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+            let corner = |x: f32, y: f32| {
+                let mut p = [0.0f32; 3];
+                p[axis] = side;
+                p[a] = x;
+                p[b] = y;
+                p
+            };
+            let quad = if side > 0.0 {
+                [corner(-1.0, -1.0), corner(-1.0, 1.0), corner(1.0, 1.0), corner(1.0, -1.0)]
+            } else {
+                [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)]
+            };
+            for p in quad {
+                writeln!(s, "v {} {} {}", p[0], p[1], p[2]).unwrap();
+            }
+            writeln!(s, "f {}/1 {}/2 {}/3 {}/4", v + 1, v + 2, v + 3, v + 4).unwrap();
+            v += 4;
+        }
+    }
+    s
+}
+
+const FURNACE_TOML: &str = r#"
+[camera]
+eye = [0.1, -0.2, 0.05]
+target = [0.4, 0.3, 1.0]
+up = [0.0, 1.0, 0.0]
+vfov_deg = 90.0
+width = 16
+height = 16
+
+[[mesh]]
+obj = "cube.obj"
+"#;
+
+/// The furnace with `mtl` as its material file, plus `files` written beside it.
+fn furnace(dir: &Path, mtl: &str) -> Scene {
+    std::fs::write(dir.join("cube.obj"), cube_obj("cube.mtl", "furnace")).unwrap();
+    std::fs::write(dir.join("cube.mtl"), mtl).unwrap();
+    std::fs::write(dir.join("s.toml"), FURNACE_TOML).unwrap();
+    Scene::load(dir.join("s.toml")).unwrap()
+}
+
+fn same_pixels(a: &Film, b: &Film) -> bool {
+    (0..a.height).all(|y| {
+        (0..a.width)
+            .all(|x| a.get(x, y).to_array().map(f32::to_bits) == b.get(x, y).to_array().map(f32::to_bits))
+    })
+}
+
+fn settings() -> RenderSettings {
+    RenderSettings {
+        photons: Some(20_000),
+        caustic_photons: Some(2_000),
+        spp: Some(4),
+        seed: Some(7),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_constant_texture_renders_as_its_constant_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // An EXR of 0.5 is kd = 0.5: the furnace's exact 2.0.
+    let half = Film { width: 3, height: 5, pixels: vec![Vec3::splat(0.5); 15] };
+    half.write_exr(&d.join("half.exr")).unwrap();
+    let textured = furnace(d, "newmtl furnace\nKd 0.9 0.1 0.3\nKe 1 1 1\nmap_Kd half.exr\n");
+    assert!(textured.textured && textured.warnings.is_empty(), "{:?}", textured.warnings);
+    let plain = furnace(d, "newmtl furnace\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    for integrator in [IntegratorKind::Photon, IntegratorKind::Sppm, IntegratorKind::Path] {
+        let s = RenderSettings { integrator: Some(integrator), passes: Some(2), ..settings() };
+        let a = render_checked(&textured, &s, 16).film;
+        let b = render_checked(&plain, &s, 16).film;
+        assert!(same_pixels(&a, &b), "{integrator:?}: the textured furnace differs from kd = 0.5");
+        assert!((a.mean() - 2.0).abs() < 0.03, "{integrator:?}: mean {}", a.mean());
+    }
+    // An 8-bit PNG of sRGB 188 is kd = 0.5029 (the sRGB curve), not 188/255 = 0.737.
+    image::RgbImage::from_pixel(4, 4, image::Rgb([188, 188, 188])).save(d.join("grey.png")).unwrap();
+    let kd = (((188.0f64 / 255.0 + 0.055) / 1.055).powf(2.4)) as f32;
+    let png = furnace(d, "newmtl furnace\nKd 1 1 1\nKe 1 1 1\nmap_Kd grey.png\n");
+    let plain = furnace(d, &format!("newmtl furnace\nKd {kd:?} {kd:?} {kd:?}\nKe 1 1 1\n"));
+    let (a, b) = (render_checked(&png, &settings(), 16).film, render_checked(&plain, &settings(), 16).film);
+    assert!(same_pixels(&a, &b), "the sRGB PNG differs from kd = {kd}");
+    // The scene file's kd_texture replaces the MTL's map.
+    std::fs::write(
+        d.join("s.toml"),
+        format!("{FURNACE_TOML}\n[materials.furnace]\ntype = \"emissive\"\nkd = [0.2, 0.2, 0.2]\nke = [1.0, 1.0, 1.0]\nkd_texture = \"half.exr\"\n"),
+    )
+    .unwrap();
+    std::fs::write(d.join("cube.mtl"), "newmtl furnace\nKd 0.1 0.1 0.1\nKe 1 1 1\nmap_Kd grey.png\n")
+        .unwrap();
+    let overridden = Scene::load(d.join("s.toml")).unwrap();
+    let half_again = furnace(d, "newmtl furnace\nKd 0.5 0.5 0.5\nKe 1 1 1\n");
+    let (a, b) = (
+        render_checked(&overridden, &settings(), 16).film,
+        render_checked(&half_again, &settings(), 16).film,
+    );
+    assert!(same_pixels(&a, &b), "kd_texture did not replace map_Kd");
+}
+
+/// A closed white room 2 m on a side lit by a small ceiling light, its +X wall textured
+/// half red (lower half) and half blue (upper half); the camera looks at the floor by that wall.
+fn bleeding_room(dir: &Path) -> Scene {
+    let mut room = cube_obj("room.mtl", "white");
+    // The +X wall (axis 0, side +1) is the second face: give it its own material.
+    room = room.replacen("f 5/1 6/2 7/3 8/4", "usemtl wall\nf 5/1 6/2 7/3 8/4\nusemtl white", 1);
+    std::fs::write(dir.join("room.obj"), room).unwrap();
+    // The light: a small quad just under the ceiling, facing down.
+    std::fs::write(
+        dir.join("light.obj"),
+        "mtllib room.mtl\nusemtl light\nv -0.2 0.98 -0.2\nv 0.2 0.98 -0.2\nv 0.2 0.98 0.2\nv -0.2 0.98 0.2\nf 1 2 3 4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("room.mtl"),
+        "newmtl white\nKd 0.7 0.7 0.7\nnewmtl wall\nKd 1 1 1\nmap_Kd wall.png\nnewmtl light\nKd 0 0 0\nKe 30 30 30\n",
+    )
+    .unwrap();
+    // Texture rows from the top: blue above, red below (v up).
+    let wall = image::RgbImage::from_fn(8, 8, |_, y| {
+        if y < 4 {
+            image::Rgb([20, 40, 230])
+        } else {
+            image::Rgb([230, 30, 20])
+        }
+    });
+    wall.save(dir.join("wall.png")).unwrap();
+    std::fs::write(
+        dir.join("s.toml"),
+        r#"
+[camera]
+eye = [-0.6, 0.2, 0.9]
+target = [0.7, -0.8, -0.2]
+up = [0.0, 1.0, 0.0]
+vfov_deg = 70.0
+width = 16
+height = 16
+
+[[mesh]]
+obj = "room.obj"
+
+[[mesh]]
+obj = "light.obj"
+"#,
+    )
+    .unwrap();
+    Scene::load(dir.join("s.toml")).unwrap()
+}
+
+#[test]
+fn photons_bleed_the_texture_colour_as_the_path_tracer_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = bleeding_room(dir.path());
+    assert!(scene.textured);
+    let path = RenderSettings {
+        integrator: Some(IntegratorKind::Path),
+        spp: Some(1024),
+        seed: Some(1),
+        ..Default::default()
+    };
+    let photon =
+        RenderSettings { photons: Some(400_000), spp: Some(16), seed: Some(1), ..Default::default() };
+    let (p, q) = (render_checked(&scene, &path, 16).film, render_checked(&scene, &photon, 16).film);
+    // Red over blue in the light bounced onto the floor: the photons carried the texture.
+    let mean = |f: &Film| -> Vec3 { f.pixels.iter().copied().sum::<Vec3>() / f.pixels.len() as f32 };
+    let (mp, mq) = (mean(&p), mean(&q));
+    println!("path {mp:?}, photon {mq:?}");
+    for c in 0..3 {
+        assert!((mq[c] - mp[c]).abs() < 0.03 * mp[c] + 0.002, "channel {c}: photon {mq:?} vs path {mp:?}");
+    }
+    // The red the floor shows is the texture's, not the wall's Kd (white).
+    assert!(mp.x > 1.1 * mp.z, "the floor by the wall should be reddish: {mp:?}");
+}
