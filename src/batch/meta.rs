@@ -38,7 +38,7 @@ impl ImageMeta {
         ImageMeta {
             scene_hash: scene_hash(scene),
             settings_hash: settings_hash(cfg),
-            view_hash: fnv1a(format!("{view:?}").as_bytes()),
+            view_hash: view_hash(view),
             camera: camera.to_string(),
             frame,
         }
@@ -72,6 +72,11 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
     h
+}
+
+/// The view: eye, frame, field of view, resolution and lens (every field of the camera).
+pub fn view_hash(view: &Camera) -> u64 {
+    fnv1a(format!("{view:?}").as_bytes())
 }
 
 /// The scene's content as loaded: vertices, triangles and their materials, materials, lights
@@ -109,5 +114,22 @@ mod tests {
         assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
         assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
         assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn the_view_hash_includes_the_lens() {
+        use crate::scene::Lens;
+        use glam::Vec3;
+        let pinhole = Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 8, 8).unwrap();
+        let lens = |aperture_radius, focus_distance| {
+            view_hash(&pinhole.with_lens(Lens { aperture_radius, focus_distance }).unwrap())
+        };
+        assert_eq!(lens(0.0, 3.0), view_hash(&pinhole), "a pinhole's focus changes nothing");
+        let hashes = [view_hash(&pinhole), lens(0.01, 1.0), lens(0.02, 1.0), lens(0.01, 2.0)];
+        for i in 0..hashes.len() {
+            for j in 0..i {
+                assert_ne!(hashes[i], hashes[j], "{i} {j}");
+            }
+        }
     }
 }

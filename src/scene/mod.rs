@@ -11,7 +11,7 @@ mod file;
 mod obj;
 mod transform;
 
-pub use camera::{Camera, CameraKey, MotionError, SceneCamera, Turntable, MAX_FRAMES};
+pub use camera::{Camera, CameraKey, Lens, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
