@@ -74,9 +74,15 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
     h
 }
 
-/// The view: eye, frame, field of view, resolution and lens (every field of the camera).
+/// The view: eye, frame, field of view, resolution and lens (every field of the camera). A
+/// pinhole's is hashed without its lens, as it was before cameras had one, so `--resume` still
+/// recognises pinhole images written then.
 pub fn view_hash(view: &Camera) -> u64 {
-    fnv1a(format!("{view:?}").as_bytes())
+    let described = format!("{view:?}");
+    if view.lens.is_pinhole() {
+        return fnv1a(described.replace(&format!(", lens: {:?}", view.lens), "").as_bytes());
+    }
+    fnv1a(described.as_bytes())
 }
 
 /// The scene's content as loaded: vertices, triangles and their materials, materials, lights
@@ -125,6 +131,11 @@ mod tests {
             view_hash(&pinhole.with_lens(Lens { aperture_radius, focus_distance }).unwrap())
         };
         assert_eq!(lens(0.0, 3.0), view_hash(&pinhole), "a pinhole's focus changes nothing");
+        // A pinhole hashes as cameras did before they had a lens (their derived Debug text).
+        let before =
+            "Camera { eye: Vec3(0.0, 0.0, 0.0), forward: Vec3(0.0, 0.0, 1.0), right: Vec3(-1.0, 0.0, 0.0), \
+                      up: Vec3(0.0, 1.0, -0.0), tan_half_fov: 0.36397022, width: 8, height: 8 }";
+        assert_eq!(view_hash(&pinhole), fnv1a(before.as_bytes()));
         let hashes = [view_hash(&pinhole), lens(0.01, 1.0), lens(0.02, 1.0), lens(0.01, 2.0)];
         for i in 0..hashes.len() {
             for j in 0..i {
