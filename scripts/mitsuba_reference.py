@@ -16,7 +16,12 @@ then shades with the face normal n = (v1 - v0) x (v2 - v0), as we do). Mapping (
     emissive  -> area emitter, radiance ke (front side only) + twosided(diffuse kd)
     point     -> point, intensity (W/sr)
     distant   -> directional, direction = the way the light travels (as ours), irradiance (W/m^2)
-    camera    -> perspective, fov_axis y, look_at, hdrfilm rgb float32, box rfilter
+    camera    -> perspective, fov_axis y, look_at, hdrfilm rgb float32, box rfilter;
+                 with aperture_radius > 0: thinlens (aperture_radius, focus_distance: the same
+                 names and meaning; focus_distance defaults to |target - eye| as ours)
+    [[mesh]]  -> scale, rotate, translate or matrix applied to the vertices here as
+                 src/scene/transform.rs does (T R_n .. R_1 S, or M), the winding reversed where
+                 the determinant is negative
     glossy, spot, anything else -> error (no approximation)
 
 Transport: `path`, max_depth -1, rr_depth 5, hide_emitters false, independent sampler.
@@ -160,6 +165,35 @@ def resolve_material(name, mtl, entry):
     return m
 
 
+def rotation_matrix(axis, degrees):
+    """Right-handed rotation about the axis through the origin (Rodrigues), as glam's."""
+    k = np.asarray(axis, dtype=np.float64)
+    k = k / np.linalg.norm(k)
+    a = math.radians(float(degrees))
+    cross = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return math.cos(a) * np.eye(3) + math.sin(a) * cross + (1 - math.cos(a)) * np.outer(k, k)
+
+
+def mesh_transform(i, mesh):
+    """(linear 3x3, translation) of a [[mesh]] entry: `matrix` (12 or 16 numbers, row-major),
+    or scale, then the rotations in order, then translate (src/scene/transform.rs)."""
+    if "matrix" in mesh:
+        m = np.array(mesh["matrix"], dtype=np.float64)
+        if any(k in mesh for k in ("scale", "rotate", "translate")) or len(m) not in (12, 16):
+            raise Refused(f"mesh[{i}].matrix: 12 or 16 numbers, and not with scale/rotate/translate")
+        if len(m) == 16 and list(m[12:]) != [0.0, 0.0, 0.0, 1.0]:
+            raise Refused(f"mesh[{i}].matrix: not affine")
+        m = m[:12].reshape(3, 4)
+        return m[:, :3], m[:, 3]
+    scale = mesh.get("scale", 1.0)
+    scale = np.array([scale] * 3 if isinstance(scale, (int, float)) else scale, dtype=np.float64)
+    linear = np.diag(scale)
+    rotate = mesh.get("rotate", [])
+    for r in [rotate] if isinstance(rotate, dict) else rotate:
+        linear = rotation_matrix(r["axis"], r["degrees"]) @ linear
+    return linear, np.array(mesh.get("translate", [0.0, 0.0, 0.0]), dtype=np.float64)
+
+
 def load_scene(toml_path):
     """Camera, {material name: (material, vertices, triangles)}, lights, as our loader sees them."""
     toml_path = Path(toml_path)
@@ -171,14 +205,13 @@ def load_scene(toml_path):
     entries = scene.get("materials", {})
     groups, mtl_all = {}, {}
     for i, mesh in enumerate(scene.get("mesh", [])):
-        unknown = set(mesh) - {"obj", "material", "scale", "translate"}
+        unknown = set(mesh) - {"obj", "material", "scale", "rotate", "translate", "matrix"}
         if unknown:
             raise Refused(f"mesh[{i}]: unknown keys {sorted(unknown)}")
         verts, tris, tri_mat, mtl = parse_obj(toml_path.parent / mesh["obj"])
-        scale = mesh.get("scale", 1.0)
-        scale = np.array([scale] * 3 if isinstance(scale, (int, float)) else scale, dtype=np.float64)
-        verts = verts * scale + np.array(mesh.get("translate", [0.0, 0.0, 0.0]), dtype=np.float64)
-        if np.prod(scale) < 0:  # a mirroring scale flips the winding; the renderer restores it
+        linear, translate = mesh_transform(i, mesh)
+        verts = verts @ linear.T + translate
+        if np.linalg.det(linear) < 0:  # a mirroring transform flips the winding; the renderer restores it
             tris = tris[:, [0, 2, 1]]
         if "material" in mesh:
             tri_mat = [mesh["material"]] * len(tris)
@@ -227,7 +260,17 @@ def bsdf_dict(m):
 
 
 def sensor_dict(mi, camera, eye, target, up, spp):
-    """The perspective sensor of our camera entry (its fov and film) looking from eye at target."""
+    """The sensor of our camera entry (its fov, lens and film) looking from eye at target:
+    `perspective`, or `thinlens` with the same aperture_radius and focus_distance."""
+    if "key" in camera and any(k in key for key in camera["key"] for k in ("aperture_radius", "focus_distance")):
+        raise Refused("keyed lenses are not reproduced here")
+    aperture = float(camera.get("aperture_radius", 0.0))
+    lens = {}
+    if aperture > 0:
+        focus = camera.get("focus_distance")
+        focus = np.linalg.norm(np.asarray(target, dtype=np.float64) - np.asarray(eye, dtype=np.float64)) \
+            if focus is None else focus
+        lens = {"type": "thinlens", "aperture_radius": aperture, "focus_distance": float(focus)}
     return {
         "type": "perspective",
         "fov_axis": "y",
@@ -244,7 +287,7 @@ def sensor_dict(mi, camera, eye, target, up, spp):
             "component_format": "float32",
         },
         "sampler": {"type": "independent", "sample_count": spp},
-    }
+    } | lens
 
 
 def build(mi, camera, groups, lights, spp):

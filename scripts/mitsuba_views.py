@@ -6,8 +6,10 @@
         (--seconds S | --frames F,G,... --spp N) [--camera NAME] [--threads T] [--variant V]
 
 Reads our scene with scripts/mitsuba_reference.py's loader (the same exact mapping, or a
-refusal), takes the camera `--camera` (default: the first) and its turntable (keyed cameras are
-refused: their Catmull-Rom curve is not reproduced here), and builds the Mitsuba scene once.
+refusal; mesh transforms included), takes the camera `--camera` (default: the first) and its
+turntable (keyed cameras are refused: their Catmull-Rom curve is not reproduced here), and
+builds the Mitsuba scene once. A camera with a thin lens gets `thinlens` sensors (through
+mitsuba_reference.sensor_dict); a turntable keeps the lens, as ours does.
 Each frame's view is a sensor of its own, rendered with `mi.render(scene, sensor=...)` in one
 process, as a user driving Mitsuba from Python would render many views.
 

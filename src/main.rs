@@ -436,8 +436,17 @@ fn info(path: &std::path::Path) -> Result<()> {
     println!("triangles  {}", scene.mesh.len());
     println!("vertices   {}", scene.mesh.positions.len());
     println!("bounds     {:?} .. {:?}", b.min.to_array(), b.max.to_array());
+    let lens = scene.camera.lens;
+    let lens = if lens.is_pinhole() {
+        "pinhole".to_string()
+    } else {
+        format!(
+            "thin lens: aperture radius {} m, focus distance {} m",
+            lens.aperture_radius, lens.focus_distance
+        )
+    };
     println!(
-        "camera     {}x{}, eye {:?}",
+        "camera     {}x{}, eye {:?}, {lens}",
         scene.camera.width,
         scene.camera.height,
         scene.camera.eye.to_array()

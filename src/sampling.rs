@@ -245,6 +245,30 @@ pub fn halton2(i: u64, offset: [f32; 2]) -> [f32; 2] {
     [wrap(radical_inverse_2(i), offset[0]), wrap(radical_inverse_3(i), offset[1])]
 }
 
+/// Dimensions 3 and 4 of the Halton sequence point `i` (radical inverses in bases 5 and 7),
+/// shifted by `offset` modulo 1: with [`halton2`] at the same `i`, a 4D Halton point, so a
+/// pixel's lens samples are stratified jointly with its film positions.
+#[inline]
+pub fn halton2_lens(i: u64, offset: [f32; 2]) -> [f32; 2] {
+    let wrap = |u: f64, o: f32| {
+        let v = (u + o as f64).fract() as f32;
+        v.min(ONE_MINUS_EPSILON)
+    };
+    [wrap(radical_inverse(5, i), offset[0]), wrap(radical_inverse(7, i), offset[1])]
+}
+
+/// The base-`base` digits of `i` mirrored about the point.
+#[inline]
+pub fn radical_inverse(base: u64, mut i: u64) -> f64 {
+    let (mut reversed, mut scale) = (0u64, 1.0f64);
+    while i > 0 {
+        reversed = reversed * base + i % base;
+        scale /= base as f64;
+        i /= base;
+    }
+    reversed as f64 * scale
+}
+
 /// Van der Corput: the bits of `i` mirrored about the binary point.
 #[inline]
 pub fn radical_inverse_2(i: u64) -> f64 {
@@ -387,5 +411,24 @@ mod tests {
         assert!((radical_inverse_3(5) - (2.0 / 3.0 + 1.0 / 9.0)).abs() < 1e-12);
         let [x, y] = halton2(3, [0.9, 0.9]);
         assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+    }
+
+    /// The lens dimensions (bases 5 and 7) are stratified as the film's are, and the generic
+    /// radical inverse agrees with the base-3 one.
+    #[test]
+    fn halton_lens_dimensions_are_stratified() {
+        let (nx, ny) = (25u64, 7u64);
+        let mut seen = vec![false; (nx * ny) as usize];
+        for i in 0..nx * ny {
+            let (x, y) = (radical_inverse(5, i) + 1e-9, radical_inverse(7, i) + 1e-9);
+            let cell = ((y * ny as f64) as u64 * nx + (x * nx as f64) as u64) as usize;
+            assert!(!seen[cell], "point {i} shares cell {cell}");
+            seen[cell] = true;
+        }
+        for i in [0, 1, 5, 12345, u64::MAX] {
+            assert_eq!(radical_inverse(3, i), radical_inverse_3(i));
+        }
+        let [x, y] = halton2_lens(1, [0.0, 0.0]);
+        assert!((x - 0.2).abs() < 1e-7 && (y - 1.0 / 7.0).abs() < 1e-7, "{x} {y}");
     }
 }

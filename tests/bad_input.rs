@@ -113,6 +113,34 @@ fn cases() -> Vec<Case> {
             edits: &[("cornell.toml", "height = 256", "height = 256\n\n[[camera.key]]\nframe = 3")],
             ..case("an animation of one key", &["cornell.toml", "field `camera.key`", "needs at least 2"])
         },
+        Case {
+            edits: &[("cornell.toml", "height = 256", "height = 256\naperture_radius = -0.01")],
+            ..case("a negative aperture", &["cornell.toml", "field `camera.aperture_radius`", "-0.01"])
+        },
+        Case {
+            edits: &[("cornell.toml", "height = 256", "height = 256\naperture_radius = 0.01\nfocus_distance = 0")],
+            ..case("focus at the lens", &["cornell.toml", "field `camera.focus_distance`", "> 0"])
+        },
+        Case {
+            edits: &[("cornell.toml", "obj = \"cornell.obj\"", "obj = \"cornell.obj\"\nrotate = { axis = [0, 0, 0], degrees = 30 }")],
+            ..case("a rotation about no axis", &["cornell.toml", "field `mesh[0].rotate.axis`", "zero"])
+        },
+        Case {
+            edits: &[(
+                "cornell.toml",
+                "obj = \"cornell.obj\"",
+                "obj = \"cornell.obj\"\nmatrix = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0.1, 1]",
+            )],
+            ..case("a projective matrix", &["cornell.toml", "field `mesh[0].matrix`", "affine"])
+        },
+        Case {
+            edits: &[(
+                "cornell.toml",
+                "obj = \"cornell.obj\"",
+                "obj = \"cornell.obj\"\nmatrix = [1, 2, 3, 0, 2, 4, 6, 0, 0, 0, 1, 0]",
+            )],
+            ..case("a singular matrix", &["cornell.toml", "field `mesh[0].matrix`", "singular"])
+        },
         Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
         Case {
             flags: &[("--width", "1000000")],

@@ -38,7 +38,7 @@ impl ImageMeta {
         ImageMeta {
             scene_hash: scene_hash(scene),
             settings_hash: settings_hash(cfg),
-            view_hash: fnv1a(format!("{view:?}").as_bytes()),
+            view_hash: view_hash(view),
             camera: camera.to_string(),
             frame,
         }
@@ -72,6 +72,17 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
         h = h.wrapping_mul(0x0000_0100_0000_01b3);
     }
     h
+}
+
+/// The view: eye, frame, field of view, resolution and lens (every field of the camera). A
+/// pinhole's is hashed without its lens, as it was before cameras had one, so `--resume` still
+/// recognises pinhole images written then.
+pub fn view_hash(view: &Camera) -> u64 {
+    let described = format!("{view:?}");
+    if view.lens.is_pinhole() {
+        return fnv1a(described.replace(&format!(", lens: {:?}", view.lens), "").as_bytes());
+    }
+    fnv1a(described.as_bytes())
 }
 
 /// The scene's content as loaded: vertices, triangles and their materials, materials, lights
@@ -109,5 +120,27 @@ mod tests {
         assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
         assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
         assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
+    }
+
+    #[test]
+    fn the_view_hash_includes_the_lens() {
+        use crate::scene::Lens;
+        use glam::Vec3;
+        let pinhole = Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 8, 8).unwrap();
+        let lens = |aperture_radius, focus_distance| {
+            view_hash(&pinhole.with_lens(Lens { aperture_radius, focus_distance }).unwrap())
+        };
+        assert_eq!(lens(0.0, 3.0), view_hash(&pinhole), "a pinhole's focus changes nothing");
+        // A pinhole hashes as cameras did before they had a lens (their derived Debug text).
+        let before =
+            "Camera { eye: Vec3(0.0, 0.0, 0.0), forward: Vec3(0.0, 0.0, 1.0), right: Vec3(-1.0, 0.0, 0.0), \
+                      up: Vec3(0.0, 1.0, -0.0), tan_half_fov: 0.36397022, width: 8, height: 8 }";
+        assert_eq!(view_hash(&pinhole), fnv1a(before.as_bytes()));
+        let hashes = [view_hash(&pinhole), lens(0.01, 1.0), lens(0.02, 1.0), lens(0.01, 2.0)];
+        for i in 0..hashes.len() {
+            for j in 0..i {
+                assert_ne!(hashes[i], hashes[j], "{i} {j}");
+            }
+        }
     }
 }

@@ -3,7 +3,9 @@
 //!
 //! A pixel's sample positions are a stretch of a Halton sequence rotated per pixel (the
 //! rotation depends on the render's seed and the pixel only), each pass continuing where the
-//! last stopped, so the samples of all passes together stay stratified. Rows are rendered in
+//! last stopped, so the samples of all passes together stay stratified. Through a thin lens,
+//! each sample's point on the lens is the same Halton point's next two dimensions (bases 5 and
+//! 7) with a rotation of their own. Rows are rendered in
 //! parallel and every pixel has its own generator seeded from (pass seed, pixel), so the image
 //! does not depend on the thread count.
 
@@ -11,7 +13,7 @@ use super::{Counters, Frame, Part, Progress};
 use crate::accel::{Accel, Hit};
 use crate::film::Film;
 use crate::geometry::Ray;
-use crate::sampling::{derive_seed, halton2};
+use crate::sampling::{derive_seed, halton2, halton2_lens};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
@@ -48,6 +50,14 @@ impl PixelSamples {
         halton2(index, self.rotation(stream, pixel))
     }
 
+    /// Where on the lens (in `[0, 1)²`, for [`crate::scene::Camera::lens_ray`]) sample
+    /// `index` of `stream` in pixel number `pixel` lies: the lens dimensions of the same
+    /// Halton point as [`PixelSamples::position`]'s.
+    #[inline]
+    pub fn lens_position(&self, stream: Stream, pixel: u64, index: u64) -> [f32; 2] {
+        halton2_lens(index, self.lens_rotation(stream, pixel))
+    }
+
     /// The per-pixel rotation of `stream`'s sequence (fixed over passes).
     #[inline]
     fn rotation(&self, stream: Stream, pixel: u64) -> [f32; 2] {
@@ -55,6 +65,21 @@ impl PixelSamples {
             Stream::Camera => 0x5A3D1E,
             Stream::VisiblePoint => 0x715B1E,
         };
+        self.rotation_of(salt, pixel)
+    }
+
+    /// The per-pixel rotation of `stream`'s lens dimensions, independent of the film's.
+    #[inline]
+    fn lens_rotation(&self, stream: Stream, pixel: u64) -> [f32; 2] {
+        let salt = match stream {
+            Stream::Camera => 0x1E45CA,
+            Stream::VisiblePoint => 0x1E45B1,
+        };
+        self.rotation_of(salt, pixel)
+    }
+
+    #[inline]
+    fn rotation_of(&self, salt: u64, pixel: u64) -> [f32; 2] {
         let mut rotation = Pcg32::seed_from_u64(derive_seed(self.seed, salt, pixel));
         [rotation.gen(), rotation.gen()]
     }
@@ -95,9 +120,19 @@ impl<A: Accel> Frame<'_, A> {
         let pixel = py as u64 * self.camera.width as u64 + px as u64;
         let offset = samples.rotation(Stream::Camera, pixel);
         batch.rays.clear();
-        for s in 0..samples.spp as u64 {
-            let [jx, jy] = halton2(samples.first + s, offset);
-            batch.rays.push(self.camera.ray(px as f32 + jx, py as f32 + jy));
+        if self.camera.lens.is_pinhole() {
+            for s in 0..samples.spp as u64 {
+                let [jx, jy] = halton2(samples.first + s, offset);
+                batch.rays.push(self.camera.ray(px as f32 + jx, py as f32 + jy));
+            }
+        } else {
+            let lens = samples.lens_rotation(Stream::Camera, pixel);
+            for s in 0..samples.spp as u64 {
+                let i = samples.first + s;
+                let [jx, jy] = halton2(i, offset);
+                let ray = self.camera.lens_ray(px as f32 + jx, py as f32 + jy, halton2_lens(i, lens));
+                batch.rays.push(ray);
+            }
         }
         batch.hits.clear();
         batch.hits.resize(batch.rays.len(), None);
@@ -111,7 +146,11 @@ impl<A: Accel> Frame<'_, A> {
     pub fn visible_point_ray(&self, samples: &PixelSamples, pass: u32, px: u32, py: u32) -> Ray {
         let pixel = py as u64 * self.camera.width as u64 + px as u64;
         let [jx, jy] = samples.position(Stream::VisiblePoint, pixel, pass as u64);
-        self.camera.ray(px as f32 + jx, py as f32 + jy)
+        if self.camera.lens.is_pinhole() {
+            return self.camera.ray(px as f32 + jx, py as f32 + jy);
+        }
+        let lens = samples.lens_position(Stream::VisiblePoint, pixel, pass as u64);
+        self.camera.lens_ray(px as f32 + jx, py as f32 + jy, lens)
     }
 }
 
@@ -225,6 +264,27 @@ mod tests {
         let samples = PixelSamples { spp: 4, first: 0, seed: 7 };
         let q = quarters((0..64).map(|k| samples.position(Stream::Camera, 0, 4 * k)[0]));
         assert!(q.iter().filter(|&&n| n > 0).count() <= 2, "{q:?}");
+    }
+
+    #[test]
+    fn lens_samples_are_stratified_and_independent_of_the_film_samples() {
+        // A pass continuing another: the 64 lens samples of one pixel over four passes of 16
+        // cover the lens as evenly as one pass of 64 would, and are not the film's.
+        let samples = PixelSamples { spp: 16, first: 0, seed: 11 };
+        for pixel in [0, 7, 99_999] {
+            let lens: Vec<[f32; 2]> =
+                (0..64).map(|k| samples.lens_position(Stream::Camera, pixel, k)).collect();
+            for axis in 0..2 {
+                let q = quarters(lens.iter().map(|p| p[axis]));
+                assert!(q.iter().all(|&n| (13..=19).contains(&n)), "pixel {pixel}, axis {axis}: {q:?}");
+            }
+            assert_ne!(lens[0], samples.position(Stream::Camera, pixel, 0));
+            assert_ne!(lens[0], samples.lens_position(Stream::VisiblePoint, pixel, 0));
+            assert_ne!(lens[0], samples.lens_position(Stream::Camera, pixel + 1, 0));
+        }
+        // Fixed by the seed, pixel and index alone.
+        let again = PixelSamples { spp: 4, first: 40, seed: 11 };
+        assert_eq!(again.lens_position(Stream::Camera, 7, 3), samples.lens_position(Stream::Camera, 7, 3));
     }
 
     #[test]

@@ -8,9 +8,10 @@
 //!
 //! * [`VisibleRegion`]: the cells of grids around the points a coarse pilot of camera rays
 //!   lands on (128 rays across the long side of the image, through each of up to 8 of the
-//!   views a batch renders, each followed through mirrors and glass), grown by one cell on
-//!   every side, each point at the cell size of what its ray sees (a point far away, seen
-//!   through a window, marks a coarser cell). Photons stored inside count as *seen*; their
+//!   views a batch renders, each followed through mirrors and glass; through a thin lens,
+//!   from points spread over the aperture), grown by one cell on every side, each point at the
+//!   cell size of what its ray sees (a point far away, seen through a window, marks a coarser
+//!   cell; a point out of focus, one as wide as the lens blurs it). Photons stored inside count as *seen*; their
 //!   share of the photons emitted is the map's efficiency in `--stats`.
 //! * [`EmissionGuide`]: learnt from a pilot of photons traced as usual, it tells each emitter
 //!   which of its emission samples lead to seen photons (after Hachisuka and Jensen 2011,
@@ -36,7 +37,7 @@
 use crate::accel::Accel;
 use crate::frame::specular::{walk, Start};
 use crate::frame::{Counters, Frame};
-use crate::sampling::derive_seed;
+use crate::sampling::{derive_seed, halton2_lens};
 use glam::Vec3;
 use rand::SeedableRng;
 use rand_pcg::Pcg32;
@@ -106,15 +107,22 @@ impl VisibleRegion {
             for j in 0..sh {
                 for i in 0..sw {
                     let (x, y) = ((i as f32 + 0.5) * dx, (j as f32 + 0.5) * dy);
-                    let ray = cam.ray(x, y);
+                    let pinhole = cam.ray(x, y);
                     // The angle between this ray and its neighbour one pilot cell away.
-                    let spread =
-                        (cam.ray(x + dx, y + dy).dir - ray.dir).length() * std::f32::consts::FRAC_1_SQRT_2;
+                    let spread = (cam.ray(x + dx, y + dy).dir - pinhole.dir).length()
+                        * std::f32::consts::FRAC_1_SQRT_2;
+                    // Through a thin lens, from a point of the lens that a Halton sequence
+                    // spreads over the aperture (a pinhole ignores it).
+                    let ray = cam.lens_ray(x, y, halton2_lens((j * sw + i) as u64, [0.0; 2]));
                     let start = Start::Ray(ray);
                     let landing =
                         walk(frame, start, Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
                     if let Some(l) = landing {
-                        let footprint = (l.hit.p - cam.eye).length() * spread;
+                        // The pixel's footprint, widened by the lens's blur there.
+                        let mut footprint = (l.hit.p - cam.eye).length() * spread;
+                        if !cam.lens.is_pinhole() {
+                            footprint += cam.defocus_diameter(l.hit.p);
+                        }
                         if footprint.is_finite() {
                             landings.push((l.hit.p, footprint));
                         }

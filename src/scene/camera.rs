@@ -1,5 +1,7 @@
-//! Pinhole camera with the look-at convention of `scenes/SCENES.md` (Mitsuba's `perspective`
-//! with `fov_axis = "y"`), and the scene's named cameras with their animation.
+//! The camera with the look-at convention of `scenes/SCENES.md` (Mitsuba's `perspective` with
+//! `fov_axis = "y"`): a pinhole, or a thin lens (Mitsuba's `thinlens`, pbrt's `lensradius` and
+//! `focaldistance`: Kolb, Mitchell and Hanrahan 1995, Pharr, Jakob and Humphreys, *PBR* 5.2.3),
+//! and the scene's named cameras with their animation.
 //!
 //! A [`Camera`] is one view. A [`SceneCamera`] is a camera of the scene file: a name, its own
 //! resolution, and a view per frame. It is still (one view for every frame), keyed (cubic
@@ -10,6 +12,7 @@
 //! [`SceneCamera::view`] has no failure to report.
 
 use crate::geometry::Ray;
+use crate::sampling::sample_uniform_disk_concentric;
 use glam::{DQuat, Vec3};
 use std::ops::RangeInclusive;
 
@@ -17,7 +20,39 @@ use std::ops::RangeInclusive;
 /// turntable's frame count): every frame is checked when the camera is built.
 pub const MAX_FRAMES: u32 = 1_000_000;
 
-/// A pinhole camera producing primary rays for film positions in pixels.
+/// A thin lens in front of the film: rays leave a disc of radius `aperture_radius` about the
+/// eye, in the plane spanned by the camera's right and up vectors, and every ray of a film
+/// position meets the pinhole ray of that position on the plane `focus_distance` in front of
+/// the eye (perpendicular to the view direction). A radius of 0 is a pinhole.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lens {
+    /// Metres; 0 for a pinhole.
+    pub aperture_radius: f32,
+    /// Metres along the view direction from the eye to the plane in focus; positive.
+    pub focus_distance: f32,
+}
+
+impl Lens {
+    /// No lens: every ray leaves the eye.
+    pub const PINHOLE: Lens = Lens { aperture_radius: 0.0, focus_distance: 1.0 };
+
+    /// Whether the lens can be used: a finite radius `>= 0` and a finite focus distance `> 0`.
+    pub fn is_valid(&self) -> bool {
+        self.aperture_radius >= 0.0
+            && self.aperture_radius.is_finite()
+            && self.focus_distance > 0.0
+            && self.focus_distance.is_finite()
+    }
+
+    /// Whether every ray leaves the eye.
+    #[inline]
+    pub fn is_pinhole(&self) -> bool {
+        self.aperture_radius == 0.0
+    }
+}
+
+/// A camera producing primary rays for film positions in pixels, through a pinhole or a thin
+/// [`Lens`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera {
     pub eye: Vec3,
@@ -30,11 +65,12 @@ pub struct Camera {
     pub tan_half_fov: f32,
     pub width: u32,
     pub height: u32,
+    pub lens: Lens,
 }
 
 impl Camera {
-    /// Builds the camera; `None` if the frame is degenerate (eye = target, up parallel to the
-    /// view direction) or the field of view is not in (0, 180) degrees.
+    /// Builds a pinhole camera; `None` if the frame is degenerate (eye = target, up parallel to
+    /// the view direction) or the field of view is not in (0, 180) degrees.
     pub fn look_at(
         eye: Vec3,
         target: Vec3,
@@ -50,18 +86,60 @@ impl Camera {
             return None;
         }
         let tan_half_fov = (0.5 * vfov_deg.to_radians()).tan();
-        Some(Camera { eye, forward, right, up, tan_half_fov, width, height })
+        Some(Camera { eye, forward, right, up, tan_half_fov, width, height, lens: Lens::PINHOLE })
     }
 
-    /// The primary ray through film position `(x, y)` in pixels (`x` left to right in
-    /// `[0, width)`, `y` top to bottom in `[0, height)`); the direction is normalised.
+    /// The same camera with another lens; `None` if `lens` is not [valid](Lens::is_valid).
+    /// A pinhole is kept as [`Lens::PINHOLE`] whatever its focus distance (which changes
+    /// nothing), so that equal views compare equal.
+    pub fn with_lens(mut self, lens: Lens) -> Option<Self> {
+        self.lens = if lens.is_pinhole() { Lens::PINHOLE } else { lens };
+        lens.is_valid().then_some(self)
+    }
+
+    /// The direction from the eye through film position `(x, y)`, not normalised: its
+    /// component along `forward` is 1.
     #[inline]
-    pub fn ray(&self, x: f32, y: f32) -> Ray {
+    fn film_direction(&self, x: f32, y: f32) -> Vec3 {
         let (w, h) = (self.width as f32, self.height as f32);
         let sx = (2.0 * x / w - 1.0) * self.tan_half_fov * (w / h);
         let sy = (1.0 - 2.0 * y / h) * self.tan_half_fov;
-        let dir = (self.forward + sx * self.right + sy * self.up).normalize();
-        Ray::new(self.eye, dir)
+        self.forward + sx * self.right + sy * self.up
+    }
+
+    /// The pinhole ray from the eye (the centre of the lens) through film position `(x, y)` in
+    /// pixels (`x` left to right in `[0, width)`, `y` top to bottom in `[0, height)`); the
+    /// direction is normalised.
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        Ray::new(self.eye, self.film_direction(x, y).normalize())
+    }
+
+    /// The ray through film position `(x, y)` from the point of the lens that `lens` in
+    /// `[0, 1)²` picks (Shirley and Chiu's concentric map onto the aperture's disc, as
+    /// Mitsuba's `thinlens` samples it): it leaves that point towards where the pinhole ray
+    /// meets the plane in focus. A pinhole gives [`Camera::ray`] bit for bit, whatever `lens`.
+    #[inline]
+    pub fn lens_ray(&self, x: f32, y: f32, lens: [f32; 2]) -> Ray {
+        if self.lens.is_pinhole() {
+            return self.ray(x, y);
+        }
+        let d = self.film_direction(x, y);
+        let focus = self.eye + self.lens.focus_distance * d;
+        let disc = self.lens.aperture_radius * sample_uniform_disk_concentric(lens);
+        let origin = self.eye + disc.x * self.right + disc.y * self.up;
+        Ray::new(origin, (focus - origin).normalize())
+    }
+
+    /// The diameter of the disc over which the lens blurs a point at `p` (the circle of
+    /// confusion at `p`'s depth, in metres at that depth): `2 A |z - F| / F` for a point `z`
+    /// along the view direction; 0 for a pinhole.
+    pub fn defocus_diameter(&self, p: Vec3) -> f32 {
+        if self.lens.is_pinhole() {
+            return 0.0;
+        }
+        let z = (p - self.eye).dot(self.forward);
+        2.0 * self.lens.aperture_radius * (z - self.lens.focus_distance).abs() / self.lens.focus_distance
     }
 
     /// The same camera at another resolution (the field of view is kept).
@@ -72,32 +150,42 @@ impl Camera {
     }
 }
 
-/// What a camera key sets: the look-at frame and the vertical field of view.
+/// What a camera key sets: the look-at frame, the vertical field of view and the lens.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CameraKey {
     pub eye: Vec3,
     pub target: Vec3,
     pub up: Vec3,
     pub vfov_deg: f32,
+    pub lens: Lens,
 }
 
+/// How many numbers a key has that are interpolated.
+const COMPONENTS: usize = 12;
+
 impl CameraKey {
-    /// The view at `width` x `height`; `None` where [`Camera::look_at`] refuses it or the field
-    /// of view is so small that `tan(vfov / 2)` rounds to 0 (every pixel would get one ray).
+    /// The view at `width` x `height`; `None` where [`Camera::look_at`] refuses it, the field
+    /// of view is so small that `tan(vfov / 2)` rounds to 0 (every pixel would get one ray), or
+    /// the lens is not [valid](Lens::is_valid).
     pub fn view(&self, width: u32, height: u32) -> Option<Camera> {
         let c = Camera::look_at(self.eye, self.target, self.up, self.vfov_deg, width, height)?;
-        (c.tan_half_fov > 0.0 && c.tan_half_fov.is_finite()).then_some(c)
+        (c.tan_half_fov > 0.0 && c.tan_half_fov.is_finite()).then_some(c)?.with_lens(self.lens)
     }
 
-    /// The ten numbers interpolated, in order: eye, target, up (x, y, z each), vfov_deg.
-    fn components(&self) -> [f64; 10] {
-        let (e, t, u) = (self.eye, self.target, self.up);
-        [e.x, e.y, e.z, t.x, t.y, t.z, u.x, u.y, u.z, self.vfov_deg].map(f64::from)
+    /// The twelve numbers interpolated, in order: eye, target, up (x, y, z each), vfov_deg,
+    /// aperture_radius, focus_distance.
+    fn components(&self) -> [f64; COMPONENTS] {
+        let (e, t, u, l) = (self.eye, self.target, self.up, self.lens);
+        [e.x, e.y, e.z, t.x, t.y, t.z, u.x, u.y, u.z, self.vfov_deg, l.aperture_radius, l.focus_distance]
+            .map(f64::from)
     }
 
-    fn from_components(c: [f64; 10]) -> CameraKey {
+    /// The key of interpolated numbers; the aperture's radius is clamped at 0 (the curve
+    /// undershoots 0 next to a pinhole key whose neighbour opens the lens).
+    fn from_components(c: [f64; COMPONENTS]) -> CameraKey {
         let v = |i: usize| Vec3::new(c[i] as f32, c[i + 1] as f32, c[i + 2] as f32);
-        CameraKey { eye: v(0), target: v(3), up: v(6), vfov_deg: c[9] as f32 }
+        let lens = Lens { aperture_radius: (c[10] as f32).max(0.0), focus_distance: c[11] as f32 };
+        CameraKey { eye: v(0), target: v(3), up: v(6), vfov_deg: c[9] as f32, lens }
     }
 }
 
@@ -116,7 +204,7 @@ pub struct Turntable {
 
 impl Turntable {
     /// `base` at frame `frame` (clamped to `0..frames`): eye and target turned about the axis
-    /// line, up turned with them, the field of view kept. Frame 0 is `base` itself.
+    /// line, up turned with them, the field of view and the lens kept. Frame 0 is `base` itself.
     fn turn(&self, base: &CameraKey, frame: u32) -> CameraKey {
         let f = frame.min(self.frames.saturating_sub(1));
         if f == 0 {
@@ -131,6 +219,7 @@ impl Turntable {
             target: about(base.target),
             up: (q * base.up.as_dvec3()).as_vec3(),
             vfov_deg: base.vfov_deg,
+            lens: base.lens,
         }
     }
 }
@@ -150,7 +239,7 @@ pub enum MotionError {
     Axis([f32; 3]),
     #[error(
         "frame {frame}: the {} view is degenerate (eye equals target, up is parallel to the view \
-         direction, or the field of view is not in (0, 180))",
+         direction, the field of view is not in (0, 180), or the focus distance is not positive)",
         if *turntable { "turned" } else { "interpolated" }
     )]
     Degenerate { turntable: bool, frame: u32 },
@@ -217,15 +306,16 @@ impl SceneCamera {
     /// last's must give a valid view (refused with the first that does not).
     ///
     /// Between keys `i` and `i + 1` (frames `t_i < t < t_{i+1}`, `h = t_{i+1} - t_i`,
-    /// `s = (t - t_i) / h`) each of the ten numbers (eye, target and up per component, then
-    /// vfov_deg) follows the cubic Hermite curve
+    /// `s = (t - t_i) / h`) each of the twelve numbers (eye, target and up per component, then
+    /// vfov_deg, the lens's aperture_radius and focus_distance) follows the cubic Hermite curve
     /// `p(t) = (2s³ - 3s² + 1) p_i + (s³ - 2s² + s) h m_i + (-2s³ + 3s²) p_{i+1} + (s³ - s²) h m_{i+1}`
     /// with the Catmull–Rom tangents of non-uniform spacing `m_i = (p_{i+1} - p_{i-1}) /
     /// (t_{i+1} - t_{i-1})`, one-sided `(p_1 - p_0) / (t_1 - t_0)` and `(p_n - p_{n-1}) / (t_n -
     /// t_{n-1})` at the ends. The curve passes through every key (at a key's frame the key itself
     /// is used, bit for bit), its derivative is continuous (C1), and keys on a straight line at
     /// constant speed are followed at constant speed whatever their spacing. The interpolated up
-    /// is re-orthonormalised by [`Camera::look_at`]. Sums are taken in `f64`.
+    /// is re-orthonormalised by [`Camera::look_at`], and the aperture's radius clamped at 0.
+    /// Sums are taken in `f64`.
     pub fn keyed(
         name: impl Into<String>,
         width: u32,
@@ -345,7 +435,7 @@ fn keyed_at(keys: &[(u32, CameraKey)], frame: u32) -> CameraKey {
 
 /// The Hermite curve of [`SceneCamera::keyed`] at time `t` (a frame number, not necessarily
 /// whole) inside the keys' range.
-fn interpolate(keys: &[(u32, CameraKey)], t: f64) -> [f64; 10] {
+fn interpolate(keys: &[(u32, CameraKey)], t: f64) -> [f64; COMPONENTS] {
     let time = |i: usize| f64::from(keys[i].0);
     let n = keys.len();
     // The segment [t_i, t_{i+1}] holding t.
@@ -354,7 +444,7 @@ fn interpolate(keys: &[(u32, CameraKey)], t: f64) -> [f64; 10] {
         let (lo, hi) = (j.saturating_sub(1), (j + 1).min(n - 1));
         let (p, q) = (keys[lo].1.components(), keys[hi].1.components());
         let dt = time(hi) - time(lo);
-        std::array::from_fn::<f64, 10, _>(|c| (q[c] - p[c]) / dt)
+        std::array::from_fn::<f64, COMPONENTS, _>(|c| (q[c] - p[c]) / dt)
     };
     let h = time(i + 1) - time(i);
     let s = (t - time(i)) / h;
@@ -390,6 +480,89 @@ mod tests {
         assert!((top.y / top.z - 12.5 / 35.0).abs() < 1e-5);
     }
 
+    /// Where `ray` crosses the plane `depth` in front of `c`'s eye along the view direction.
+    fn on_plane(c: &Camera, ray: &Ray, depth: f32) -> Vec3 {
+        let t = (depth - (ray.origin - c.eye).dot(c.forward)) / ray.dir.dot(c.forward);
+        ray.at(t)
+    }
+
+    /// Lens samples spread over `[0, 1)²` (an 8 x 8 grid, corners included).
+    fn lens_samples() -> impl Iterator<Item = [f32; 2]> {
+        (0..64).map(|k| [(k % 8) as f32 / 7.0 * 0.999, (k / 8) as f32 / 7.0 * 0.999])
+    }
+
+    #[test]
+    fn a_pinhole_lens_ray_is_the_pinhole_ray() {
+        let c = cornell();
+        for (x, y) in [(0.0, 0.0), (17.3, 200.9), (255.9, 128.0)] {
+            for u in lens_samples() {
+                assert_eq!(c.lens_ray(x, y, u), c.ray(x, y));
+            }
+        }
+        assert_eq!(c.defocus_diameter(Vec3::new(0.3, 0.1, 0.9)), 0.0);
+    }
+
+    #[test]
+    fn rays_of_a_pixel_meet_on_the_plane_in_focus() {
+        let lens = Lens { aperture_radius: 0.05, focus_distance: 0.8 + 0.165 };
+        let c = cornell().with_lens(lens).unwrap();
+        for (x, y) in [(128.0, 128.0), (3.5, 250.25), (200.0, 40.0)] {
+            let sharp = on_plane(&c, &c.ray(x, y), lens.focus_distance);
+            let mut widest: f32 = 0.0;
+            for u in lens_samples() {
+                let ray = c.lens_ray(x, y, u);
+                // It leaves the aperture's disc, in the lens plane...
+                let off = ray.origin - c.eye;
+                assert!(off.dot(c.forward).abs() < 1e-7 && off.length() <= lens.aperture_radius * 1.0001);
+                widest = widest.max(off.length());
+                // ...and passes through the pinhole ray's point on the plane in focus.
+                let p = on_plane(&c, &ray, lens.focus_distance);
+                assert!((p - sharp).length() < 1e-6, "({x}, {y}) {u:?}: {p} vs {sharp}");
+                assert!((ray.dir.length() - 1.0).abs() < 1e-6);
+            }
+            assert!(widest > 0.99 * lens.aperture_radius, "the samples reach the rim: {widest}");
+        }
+    }
+
+    #[test]
+    fn out_of_focus_blur_grows_with_the_aperture_and_the_distance_from_focus() {
+        // The radius of the spot the rays of one film position make on a plane `depth` ahead.
+        let spot = |aperture_radius: f32, depth: f32| {
+            let c = cornell().with_lens(Lens { aperture_radius, focus_distance: 1.0 }).unwrap();
+            let centre = on_plane(&c, &c.ray(100.0, 60.0), depth);
+            let widest = lens_samples()
+                .map(|u| (on_plane(&c, &c.lens_ray(100.0, 60.0, u), depth) - centre).length())
+                .fold(0.0, f32::max);
+            (widest, c.defocus_diameter(c.eye + depth * c.forward))
+        };
+        for depth in [0.5, 1.5, 3.0] {
+            let (small, coc) = spot(0.01, depth);
+            let (large, large_coc) = spot(0.04, depth);
+            // Four times the aperture, four times the blur; the spot fills the circle of
+            // confusion 2 A |z - F| / F.
+            assert!((large / small - 4.0).abs() < 1e-3, "depth {depth}: {small} {large}");
+            assert!((coc - 2.0 * 0.01 * (depth - 1.0f32).abs()).abs() < 1e-6);
+            assert!((large_coc / coc - 4.0).abs() < 1e-4);
+            assert!(small <= 0.5 * coc * 1.001 && small > 0.45 * coc, "depth {depth}: {small} vs {coc}");
+        }
+        assert!(spot(0.02, 3.0).0 > spot(0.02, 1.5).0, "farther from focus, blurrier");
+        assert!(spot(0.02, 1.0).0 < 1e-6, "sharp in focus");
+    }
+
+    #[test]
+    fn bad_lenses_are_refused() {
+        let c = cornell();
+        for (aperture_radius, focus_distance) in
+            [(-0.01, 1.0), (f32::NAN, 1.0), (0.1, 0.0), (0.1, -1.0), (0.0, f32::INFINITY)]
+        {
+            assert!(
+                c.with_lens(Lens { aperture_radius, focus_distance }).is_none(),
+                "{aperture_radius} {focus_distance}"
+            );
+        }
+        assert!(c.with_lens(Lens { aperture_radius: 0.0, focus_distance: 0.5 }).is_some());
+    }
+
     #[test]
     fn degenerate_frames_are_refused() {
         assert!(Camera::look_at(Vec3::ZERO, Vec3::ZERO, Vec3::Y, 40.0, 8, 8).is_none());
@@ -398,7 +571,13 @@ mod tests {
         assert!(Camera::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y, 40.0, 0, 8).is_none());
     }
     fn key(eye: [f32; 3], target: [f32; 3], vfov_deg: f32) -> CameraKey {
-        CameraKey { eye: Vec3::from(eye), target: Vec3::from(target), up: Vec3::Y, vfov_deg }
+        CameraKey {
+            eye: Vec3::from(eye),
+            target: Vec3::from(target),
+            up: Vec3::Y,
+            vfov_deg,
+            lens: Lens::PINHOLE,
+        }
     }
 
     /// Four keys at non-uniform frames, the eye swinging around and the field of view changing.
@@ -440,7 +619,7 @@ mod tests {
                 (interpolate(&keys, t - eps), interpolate(&keys, t), interpolate(&keys, t + eps));
             let (p, q) = (keys[i - 1].1.components(), keys[i + 1].1.components());
             let dt = f64::from(keys[i + 1].0 - keys[i - 1].0);
-            for c in 0..10 {
+            for c in 0..COMPONENTS {
                 let left = (at[c] - before[c]) / eps;
                 let right = (after[c] - at[c]) / eps;
                 let catmull_rom = (q[c] - p[c]) / dt;
@@ -472,9 +651,44 @@ mod tests {
     }
 
     #[test]
+    fn the_lens_is_keyed_like_the_rest_and_the_radius_never_negative() {
+        // A pinhole that opens and closes again, focus pulled from 1 m to 3 m.
+        let lens = |aperture_radius: f32, focus_distance: f32| Lens { aperture_radius, focus_distance };
+        let at = |a: f32, f: f32| CameraKey { lens: lens(a, f), ..key([0.0, 0.0, -2.0], [0.0; 3], 40.0) };
+        let keys = vec![(0, at(0.0, 1.0)), (10, at(0.0, 1.0)), (20, at(0.05, 3.0)), (30, at(0.0, 3.0))];
+        let cam = SceneCamera::keyed("pull", 8, 8, keys.clone()).unwrap();
+        for (frame, k) in &keys {
+            let expected = if k.lens.is_pinhole() { Lens::PINHOLE } else { k.lens };
+            assert_eq!(cam.view(*frame).lens, expected);
+        }
+        // The Hermite curve undershoots 0 just before frame 10 and after 20; the radius is
+        // clamped there.
+        assert!(interpolate(&keys, 8.0)[10] < 0.0);
+        assert_eq!(cam.view(8).lens.aperture_radius, 0.0);
+        let mid = cam.view(15).lens;
+        assert!(mid.aperture_radius > 0.0 && mid.aperture_radius < 0.05, "{mid:?}");
+        assert!(mid.focus_distance > 1.0 && mid.focus_distance < 3.0, "{mid:?}");
+        // A turntable keeps the lens.
+        let turntable = Turntable { frames: 4, center: Vec3::ZERO, axis: Vec3::Y, degrees: 360.0 };
+        let cam = SceneCamera::turntable("t", 8, 8, at(0.02, 2.0), turntable).unwrap();
+        assert_eq!(cam.view(3).lens, lens(0.02, 2.0));
+        // Focus pulled fast to 5 cm and held: the curve overshoots through 0 after the pull, a
+        // degenerate frame, refused as any other.
+        let keys = vec![(0, at(0.01, 2.0)), (10, at(0.01, 0.05)), (20, at(0.01, 0.05))];
+        assert!(interpolate(&keys, 13.0)[11] < 0.0);
+        let cam = SceneCamera::keyed("fast", 8, 8, keys);
+        assert!(matches!(cam, Err(MotionError::Degenerate { turntable: false, frame: 11..=19 })), "{cam:?}");
+    }
+
+    #[test]
     fn turntable_frame_0_is_the_base_and_a_quarter_of_the_frames_a_quarter_turn() {
-        let base =
-            CameraKey { eye: Vec3::new(0.3, 0.7, 2.0), target: Vec3::ZERO, up: Vec3::Y, vfov_deg: 35.0 };
+        let base = CameraKey {
+            eye: Vec3::new(0.3, 0.7, 2.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            vfov_deg: 35.0,
+            lens: Lens::PINHOLE,
+        };
         let turntable = Turntable { frames: 8, center: Vec3::ZERO, axis: Vec3::Y * 3.0, degrees: 360.0 };
         let cam = SceneCamera::turntable("turn", 16, 16, base, turntable).unwrap();
         assert_eq!(cam.frames(), Some(0..=7));

@@ -3,7 +3,7 @@
 //! (`[[camera.key]]`) or a `turntable`. Errors name the field: `camera.vfov_deg` for the
 //! single table, `camera[1].key[2].frame` in an array.
 
-use super::camera::{CameraKey, MotionError, SceneCamera, Turntable};
+use super::camera::{CameraKey, Lens, MotionError, SceneCamera, Turntable};
 use super::file::{finite3, CameraEntries, CameraEntry, KeyEntry, TurntableEntry};
 use super::SceneError;
 use crate::config::MAX_IMAGE_SIDE;
@@ -70,11 +70,16 @@ fn checked_name<'a>(path: &Path, field: &str, name: &'a str) -> Result<&'a str, 
 /// One camera; `prefix` is `camera` or `camera[i]`.
 fn camera(path: &Path, prefix: &str, name: &str, c: &CameraEntry) -> Result<SceneCamera, SceneError> {
     let f = |field: &str| format!("{prefix}.{field}");
+    let (eye, target) = (finite3(path, &f("eye"), c.eye)?, finite3(path, &f("target"), c.target)?);
     let base = CameraKey {
-        eye: finite3(path, &f("eye"), c.eye)?,
-        target: finite3(path, &f("target"), c.target)?,
+        eye,
+        target,
         up: finite3(path, &f("up"), c.up)?,
         vfov_deg: vfov(path, &f("vfov_deg"), c.vfov_deg)?,
+        lens: Lens {
+            aperture_radius: aperture(path, &f("aperture_radius"), c.aperture_radius.unwrap_or(0.0))?,
+            focus_distance: focus(path, &f("focus_distance"), c.focus_distance, eye, target)?,
+        },
     };
     for (field, v) in [(f("width"), c.width), (f("height"), c.height)] {
         if v == 0 || v > MAX_IMAGE_SIDE {
@@ -100,7 +105,10 @@ fn camera(path: &Path, prefix: &str, name: &str, c: &CameraEntry) -> Result<Scen
             let keys = keys
                 .iter()
                 .enumerate()
-                .map(|(k, key)| Ok((key.frame, camera_key(path, &format!("{prefix}.key[{k}]"), &base, key)?)))
+                .map(|(k, key)| {
+                    let prefix = format!("{prefix}.key[{k}]");
+                    Ok((key.frame, camera_key(path, &prefix, &base, c.focus_distance, key)?))
+                })
                 .collect::<Result<Vec<_>, SceneError>>()?;
             SceneCamera::keyed(name, c.width, c.height, keys).map_err(motion)
         }
@@ -111,22 +119,67 @@ fn camera(path: &Path, prefix: &str, name: &str, c: &CameraEntry) -> Result<Scen
     }
 }
 
-/// A key's values, the camera's own where it leaves them out.
-fn camera_key(path: &Path, prefix: &str, base: &CameraKey, k: &KeyEntry) -> Result<CameraKey, SceneError> {
+/// A key's values, the camera's own where it leaves them out; a key without `focus_distance`
+/// takes the camera's (`camera_focus`) if it gives one, else focuses at the key's own target.
+fn camera_key(
+    path: &Path,
+    prefix: &str,
+    base: &CameraKey,
+    camera_focus: Option<f32>,
+    k: &KeyEntry,
+) -> Result<CameraKey, SceneError> {
     let f = |field: &str| format!("{prefix}.{field}");
     let vec = |field: &str, v: Option<[f32; 3]>, default: Vec3| match v {
         Some(v) => finite3(path, &f(field), v),
         None => Ok(default),
     };
+    let (eye, target) = (vec("eye", k.eye, base.eye)?, vec("target", k.target, base.target)?);
     Ok(CameraKey {
-        eye: vec("eye", k.eye, base.eye)?,
-        target: vec("target", k.target, base.target)?,
+        eye,
+        target,
         up: vec("up", k.up, base.up)?,
         vfov_deg: match k.vfov_deg {
             Some(v) => vfov(path, &f("vfov_deg"), v)?,
             None => base.vfov_deg,
         },
+        lens: Lens {
+            aperture_radius: match k.aperture_radius {
+                Some(a) => aperture(path, &f("aperture_radius"), a)?,
+                None => base.lens.aperture_radius,
+            },
+            focus_distance: match (k.focus_distance, camera_focus) {
+                (Some(d), _) => focus(path, &f("focus_distance"), Some(d), eye, target)?,
+                (None, Some(_)) => base.lens.focus_distance,
+                (None, None) => focus(path, &f("focus_distance"), None, eye, target)?,
+            },
+        },
     })
+}
+
+/// A thin lens's radius: finite and `>= 0` metres.
+fn aperture(path: &Path, field: &str, radius: f32) -> Result<f32, SceneError> {
+    if !(radius >= 0.0 && radius.is_finite()) {
+        return Err(SceneError::field(
+            path,
+            field,
+            format!("{radius} is not a radius in metres: it must be finite and >= 0 (0: a pinhole)"),
+        ));
+    }
+    Ok(radius)
+}
+
+/// The focus distance given (finite and `> 0` metres), or the eye's distance to the target.
+fn focus(path: &Path, field: &str, given: Option<f32>, eye: Vec3, target: Vec3) -> Result<f32, SceneError> {
+    match given {
+        Some(d) if d > 0.0 && d.is_finite() => Ok(d),
+        Some(d) => Err(SceneError::field(
+            path,
+            field,
+            format!("{d} is not a distance in metres: it must be finite and > 0"),
+        )),
+        // A degenerate view (eye at the target) is refused with the view.
+        None => Ok((target - eye).length()),
+    }
 }
 
 fn turntable(

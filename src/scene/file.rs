@@ -69,6 +69,11 @@ pub struct CameraEntry {
     pub vfov_deg: f32,
     pub width: u32,
     pub height: u32,
+    /// The thin lens's radius in metres; 0 (a pinhole) by default.
+    pub aperture_radius: Option<f32>,
+    /// Metres along the view direction to the plane in focus; the eye's distance to the
+    /// target by default.
+    pub focus_distance: Option<f32>,
     #[serde(default, rename = "key")]
     pub keys: Vec<KeyEntry>,
     pub turntable: Option<TurntableEntry>,
@@ -83,6 +88,9 @@ pub struct KeyEntry {
     pub target: Option<[f32; 3]>,
     pub up: Option<[f32; 3]>,
     pub vfov_deg: Option<f32>,
+    pub aperture_radius: Option<f32>,
+    /// The camera's `focus_distance` if it gives one, else this key's eye-to-target distance.
+    pub focus_distance: Option<f32>,
 }
 
 /// `turntable = { frames = N, center = [x, y, z], axis = [0, 1, 0], degrees = 360.0 }`.
@@ -113,9 +121,52 @@ pub struct MeshEntry {
     pub obj: PathBuf,
     /// Material for every face of this mesh, replacing the OBJ's `usemtl`.
     pub material: Option<String>,
-    /// Applied to the vertices before `translate`.
+    /// Applied to the vertices first, then `rotate`, then `translate`.
     pub scale: Option<Scale>,
+    /// One rotation or a list of them, applied in the order listed (after `scale`).
+    pub rotate: Option<Rotate>,
     pub translate: Option<[f32; 3]>,
+    /// A whole affine transform instead of `scale`, `rotate` and `translate`: 12 (3x4) or 16
+    /// (4x4, last row `[0, 0, 0, 1]`) numbers, row-major, acting on column vectors.
+    pub matrix: Option<Vec<f32>>,
+}
+
+/// `rotate = { axis = [x, y, z], degrees = a }`: counter-clockwise seen from the tip of `axis`
+/// (right-hand rule), about an axis through the origin.
+#[derive(Debug, Deserialize, Clone, Copy)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    pub axis: [f32; 3],
+    pub degrees: f32,
+}
+
+/// `rotate`: one [`Rotation`] table or an array of them.
+///
+/// Deserialised by hand as [`CameraEntries`] is, so a table keeps its own error ("unknown field
+/// `angle`") and its line.
+#[derive(Debug)]
+pub enum Rotate {
+    One(Rotation),
+    Many(Vec<Rotation>),
+}
+
+impl<'de> Deserialize<'de> for Rotate {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Either;
+        impl<'de> Visitor<'de> for Either {
+            type Value = Rotate;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a rotation { axis = [x, y, z], degrees = a } or an array of them")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<Rotate, A::Error> {
+                Rotation::deserialize(MapAccessDeserializer::new(map)).map(Rotate::One)
+            }
+            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<Rotate, A::Error> {
+                Vec::deserialize(SeqAccessDeserializer::new(seq)).map(Rotate::Many)
+            }
+        }
+        deserializer.deserialize_any(Either)
+    }
 }
 
 /// Material kinds a scene file may name.

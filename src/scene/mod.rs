@@ -12,7 +12,7 @@ mod materials;
 mod obj;
 mod transform;
 
-pub use camera::{Camera, CameraKey, MotionError, SceneCamera, Turntable, MAX_FRAMES};
+pub use camera::{Camera, CameraKey, Lens, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,

@@ -400,3 +400,88 @@ fn unknown_camera_fields_keep_their_line() {
         .to_string();
     assert!(e.contains("line 31, column 1") && e.contains("unknown field `focal_length`"), "{e}");
 }
+
+#[test]
+fn a_thin_lens_loads_focused_at_the_target_unless_told() {
+    let lens = |s: &Scene| s.camera.lens;
+    let s = load_cameras(&format!("{CAMERA}aperture_radius = 0.02\n")).unwrap();
+    assert_eq!(lens(&s), Lens { aperture_radius: 0.02, focus_distance: 2.0 });
+    let s = load_cameras(&format!("{CAMERA}aperture_radius = 0.02\nfocus_distance = 0.7\n")).unwrap();
+    assert_eq!(lens(&s), Lens { aperture_radius: 0.02, focus_distance: 0.7 });
+    // Aperture 0 is the pinhole camera the file would give without the fields.
+    let s = load_cameras(&format!("{CAMERA}aperture_radius = 0\nfocus_distance = 3\n")).unwrap();
+    assert_eq!(s.camera, load_cameras(CAMERA).unwrap().camera);
+    // A key without a focus distance focuses at its own target, unless the camera gives one;
+    // it keeps the camera's aperture unless it sets its own.
+    let keys = "[[camera.key]]\nframe = 0\n[[camera.key]]\nframe = 4\neye = [0, 0, -3]\n[[camera.key]]\nframe = 8\naperture_radius = 0.05\nfocus_distance = 1.5\n";
+    let s = load_cameras(&format!("{CAMERA}aperture_radius = 0.01\n{keys}")).unwrap();
+    let lens_at = |f: u32| s.cameras[0].view(f).lens;
+    assert_eq!(lens_at(4), Lens { aperture_radius: 0.01, focus_distance: 3.0 });
+    assert_eq!(lens_at(8), Lens { aperture_radius: 0.05, focus_distance: 1.5 });
+    let s = load_cameras(&format!("{CAMERA}aperture_radius = 0.01\nfocus_distance = 0.5\n{keys}")).unwrap();
+    assert_eq!(s.cameras[0].view(4).lens, Lens { aperture_radius: 0.01, focus_distance: 0.5 });
+}
+
+#[test]
+fn bad_lenses_are_refused_naming_the_field() {
+    let cases: Vec<(String, &str)> = vec![
+        (
+            format!("{CAMERA}aperture_radius = -0.01\n"),
+            "field `camera.aperture_radius`: -0.01 is not a radius",
+        ),
+        (format!("{CAMERA}aperture_radius = nan\n"), "field `camera.aperture_radius`: NaN is not a radius"),
+        (
+            format!("{CAMERA}aperture_radius = 0.1\nfocus_distance = 0\n"),
+            "field `camera.focus_distance`: 0 is not a distance",
+        ),
+        (
+            format!("{CAMERA}aperture_radius = 0.1\nfocus_distance = -2\n"),
+            "field `camera.focus_distance`: -2 is not a distance",
+        ),
+        (format!("{CAMERA}focus_distance = inf\n"), "field `camera.focus_distance`: inf is not a distance"),
+        (
+            TWO_CAMERAS.replace("vfov_deg = 30", "vfov_deg = 30\naperture_radius = -1"),
+            "field `camera[0].key[1].aperture_radius`: -1 is not a radius",
+        ),
+        (
+            TWO_CAMERAS.replace("vfov_deg = 30", "vfov_deg = 30\nfocus_distance = 0"),
+            "field `camera[0].key[1].focus_distance`: 0 is not a distance",
+        ),
+        (format!("{CAMERA}aperture = 0.1\n"), "unknown field `aperture`"),
+    ];
+    for (toml, expected) in cases {
+        let e = match load_cameras(&toml) {
+            Ok(_) => panic!("expected an error containing `{expected}` from:\n{toml}"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(expected), "expected `{expected}` in: {e}");
+        assert!(!e.contains('\n'), "{e:?}");
+    }
+}
+
+/// A quad in the z = 0 plane with a normal per vertex: three +Z and one without (`vn` 0 0 0).
+const QUAD_VN: &str =
+    "mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvn 0 0 1\nvn 0 0 0\nusemtl w\nf 1//1 2//1 3//1 4//2\n";
+
+#[test]
+fn rotations_and_matrices_place_the_mesh_and_its_normals() {
+    let load = |transform: &str| {
+        let toml = format!("{CAMERA}[[mesh]]\nobj = \"q.obj\"\n{transform}\n");
+        load_in_tmp(&[("scene.toml", &toml), ("q.obj", QUAD_VN), ("q.mtl", MTL)])
+    };
+    // A quarter turn about +Y takes the quad's +Z normal to +X, and (1, 0, 0) to (0, 0, -1).
+    let s = load("rotate = { axis = [0, 1, 0], degrees = 90 }\ntranslate = [0, 0, 1]").unwrap();
+    let (p, n) = (&s.mesh.positions, &s.attributes.normals);
+    assert!((p[1] - Vec3::new(0.0, 0.0, 0.0)).length() < 1e-6, "{p:?}");
+    assert!((s.mesh.normal(0).unwrap() - Vec3::X).length() < 1e-6);
+    assert!((n[0] - Vec3::X).length() < 1e-6, "{n:?}");
+    assert!(n.contains(&Vec3::ZERO), "a vertex without a normal stays without one");
+    // A mirroring matrix keeps the front face on the normals' side.
+    let s = load("matrix = [-1, 0, 0, 0,  0, 1, 0, 0,  0, 0, 1, 0,  0, 0, 0, 1]").unwrap();
+    assert_eq!(s.mesh.normal(0), Some(Vec3::Z));
+    assert_eq!(s.mesh.positions[1], Vec3::new(-1.0, 0.0, 0.0));
+    let e = load("rotate = { axis = [0, 0, 0], degrees = 90 }").unwrap_err().to_string();
+    assert!(e.contains("scene.toml: field `mesh[0].rotate.axis`: is zero"), "{e}");
+    let e = load("rotate = { axis = [0, 1, 0], angle = 90 }").unwrap_err().to_string();
+    assert!(e.contains("line 10, column 30: unknown field `angle`"), "{e}");
+}
