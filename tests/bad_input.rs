@@ -82,6 +82,22 @@ fn cases() -> Vec<Case> {
             ..case("missing scene-file texture", &["cornell.toml", "materials.red.kd_texture", "gone.png"])
         },
         Case {
+            edits: &[(
+                "cornell.toml",
+                "[materials.white]\n",
+                "[[light]]\ntype = \"environment\"\nmap = \"nosky.exr\"\n\n[materials.white]\n",
+            )],
+            ..case("missing environment map", &["cornell.toml", "light[0].map", "nosky.exr"])
+        },
+        Case {
+            edits: &[(
+                "cornell.toml",
+                "[materials.white]\n",
+                "[[light]]\ntype = \"environment\"\nradiance = [1.0, -1.0, 1.0]\n\n[materials.white]\n",
+            )],
+            ..case("negative sky radiance", &["cornell.toml", "light[0].radiance"])
+        },
+        Case {
             edits: &[("cornell.toml", "width = 256", "width = 256\nfocal_length = 35")],
             ..case("unknown TOML key", &["cornell.toml", "line 12", "unknown field `focal_length`"])
         },

@@ -1,5 +1,5 @@
 //! Direct light by shadow rays: lights chosen by power, `n` samples per shading point, and
-//! when the scene has area lights one BSDF sample each as well, the two combined by multiple
+//! when the scene has area lights or a sky one BSDF sample each as well, the two combined by multiple
 //! importance sampling (Veach 1997, power heuristic). Light sampling alone is poor where an
 //! emitter is close and large (the 1/d^2 of area sampling near a corner of the furnace) and
 //! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
@@ -76,11 +76,11 @@ pub fn direct_light<A: Accel>(
     if s.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let mis = s.lights.has_area();
+    let mis = s.lights.has_hittable();
     let mut sum = Vec3::ZERO;
     for _ in 0..n {
         sum += light_sample(s, hit, wo, m, mis, rng, c);
-        // BSDF sampling toward area lights.
+        // BSDF sampling toward area lights and the sky.
         if mis {
             let Some(scattered) = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], Radiance)
             else {
@@ -92,12 +92,19 @@ pub fn direct_light<A: Accel>(
             }
             c.rays.shadow += 1;
             let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
-            let Some(y) = s.trace(&ray, c) else { continue };
-            let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
+            let (le, light_pdf) = match s.trace(&ray, c) {
+                Some(y) => {
+                    let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
+                    if le == Vec3::ZERO {
+                        continue;
+                    }
+                    (le, s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n))
+                }
+                None => (s.lights.escaped(bs.wi), s.lights.pdf_li_escaped(bs.wi)),
+            };
             if le == Vec3::ZERO {
                 continue;
             }
-            let light_pdf = s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n);
             let w = power_heuristic(1.0, bs.pdf, 1.0, light_pdf);
             sum += scattered.weight * le * w;
         }

@@ -31,10 +31,31 @@ pub enum Start {
     Ray(Ray),
 }
 
+/// What a walk's ray reached.
+#[derive(Clone, Copy, Debug)]
+pub enum Seen<'a> {
+    /// A surface, seen from `wo`.
+    Surface { hit: &'a SurfaceHit, wo: Vec3, m: &'a Material },
+    /// Nothing: the ray left the scene along `dir`.
+    Sky { dir: Vec3 },
+}
+
+impl Seen<'_> {
+    /// The radiance emitted toward the walk: the surface's emission, or the sky's.
+    #[inline]
+    pub fn emitted(&self, lights: &crate::light::LightSet) -> Vec3 {
+        match *self {
+            Seen::Surface { hit, wo, m } => m.emitted(hit.n, wo),
+            Seen::Sky { dir } => lights.escaped(dir),
+        }
+    }
+}
+
 /// Follows `start`, carrying throughput `beta`, through at most `max_depth` specular bounces.
-/// `visit(hit, wo, material, beta)` sees every surface reached, the landing included (camera
-/// paths add the emission seen there); `count` counts each ray traced here. Returns the
-/// landing, or `None` if the walk leaves the scene, is absorbed, or runs out of depth.
+/// `visit(seen, beta)` sees every surface reached, the landing included, and the sky if the
+/// walk leaves the scene (camera paths add the emission seen); `count` counts each ray traced
+/// here. Returns the landing, or `None` if the walk leaves the scene, is absorbed, or runs out
+/// of depth.
 #[allow(clippy::too_many_arguments)]
 pub fn walk<'s, A: Accel>(
     frame: &Frame<'s, A>,
@@ -44,7 +65,7 @@ pub fn walk<'s, A: Accel>(
     rng: &mut Pcg32,
     c: &mut Counters,
     count: fn(&mut Counters),
-    mut visit: impl FnMut(&SurfaceHit, Vec3, &Material, Vec3),
+    mut visit: impl FnMut(Seen, Vec3),
 ) -> Option<Landing> {
     let (mut ray, mut first) = match start {
         Start::Traced(ray, hit) => (ray, Some(hit)),
@@ -58,10 +79,13 @@ pub fn walk<'s, A: Accel>(
                 frame.trace(&ray, c)
             }
         };
-        let hit = hit?;
+        let Some(hit) = hit else {
+            visit(Seen::Sky { dir: ray.dir.normalize() }, beta);
+            return None;
+        };
         let m = frame.scene.material_at(hit.prim, hit.uv);
         let wo = -ray.dir.normalize();
-        visit(&hit, wo, &m, beta);
+        visit(Seen::Surface { hit: &hit, wo, m: &m }, beta);
         if !m.is_specular() {
             return Some(Landing { hit, wo, m, beta });
         }

@@ -125,7 +125,7 @@ fn trace_radiance<A: Accel>(
     c: &mut Counters,
 ) -> Vec3 {
     let mut diffuse_behind = !bounced_only;
-    let mis = s.lights.has_area();
+    let mis = s.lights.has_hittable();
     let mut beta = Vec3::ONE;
     let mut l = Vec3::ZERO;
     // The previous vertex, for the MIS weight of emission found by BSDF sampling: whether it was
@@ -140,7 +140,20 @@ fn trace_radiance<A: Accel>(
             c.rays.path += 1;
             s.trace(&ray, c)
         };
-        let Some(hit) = hit else { break };
+        let Some(hit) = hit else {
+            // The sky, reached by the camera ray or the previous vertex's BSDF sample.
+            let dir = ray.dir.normalize();
+            let le = s.lights.escaped(dir);
+            if le != Vec3::ZERO && diffuse_behind {
+                let w = if specular || !mis {
+                    1.0
+                } else {
+                    power_heuristic(1.0, prev_pdf, 1.0, s.lights.pdf_li_escaped(dir))
+                };
+                l += beta * le * w;
+            }
+            break;
+        };
         let m = &s.scene.material_at(hit.prim, hit.uv);
         let wo = -ray.dir.normalize();
 

@@ -246,12 +246,11 @@ impl<A: Accel> Shading<'_, '_, A> {
         let mut l = Vec3::ZERO;
         let start = Start::Traced(ray, first);
         let count = |c: &mut Counters| c.rays.specular += 1;
-        let landing =
-            walk(self.frame, start, Vec3::ONE, self.cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
-                if emitted {
-                    l += beta * m.emitted(hit.n, wo);
-                }
-            });
+        let landing = walk(self.frame, start, Vec3::ONE, self.cfg.max_depth, rng, c, count, |seen, beta| {
+            if emitted {
+                l += beta * seen.emitted(self.frame.lights);
+            }
+        });
         if let Some(v) = landing {
             l += v.beta * self.shade(&v.hit, v.wo, &v.m, rng, scratch, c);
         }
@@ -368,8 +367,7 @@ impl<A: Accel> Shading<'_, '_, A> {
             };
             let start = Start::Ray(Ray::new(hit.spawn(s.sample.wi), s.sample.wi));
             let count = |c: &mut Counters| c.rays.gather += 1;
-            let walked =
-                walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |_, _, _, _| {});
+            let walked = walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |_, _| {});
             let Some(Landing { hit: y, wo: wy, m: ref my, beta }) = walked else { continue };
             let ly = if let Some(e) = self.precomputed(&y, wy, my, scratch, c) {
                 e.direct + e.indirect + e.caustic

@@ -178,8 +178,8 @@ fn trace_camera<A: Accel>(
     let mut l = Vec3::ZERO;
     let count = |c: &mut Counters| c.rays.specular += 1;
     let start = Start::Traced(ray, first);
-    let landing = walk(frame, start, Vec3::ONE, cfg.max_depth, rng, c, count, |hit, wo, m, beta| {
-        l += beta * m.emitted(hit.n, wo)
+    let landing = walk(frame, start, Vec3::ONE, cfg.max_depth, rng, c, count, |seen, beta| {
+        l += beta * seen.emitted(frame.lights)
     });
     if let Some(v) = &landing {
         l += v.beta * direct_light(frame, &v.hit, v.wo, &v.m, cfg.light_samples, rng, c);
@@ -202,7 +202,7 @@ pub(super) fn visible_point<'s, A: Accel>(
     c.rays.camera += 1;
     let hit = c.timed(Part::Rays, || frame.accel.intersect(&ray));
     let count = |c: &mut Counters| c.rays.specular += 1;
-    walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _, _, _| {})
+    walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _| {})
 }
 
 /// The photons of this pass around the visible point: the progressive update of `st`. The

@@ -1,4 +1,5 @@
-//! Light sources: the explicit lights of the scene file ([`LightDesc`]: point, spot, distant)
+//! Light sources: the explicit lights of the scene file ([`LightDesc`]: point, spot, distant,
+//! environment)
 //! and the area lights made of emissive triangles (from the mesh, not from this list).
 //!
 //! Sources: pbrt-v4 chapter 12 (light interface, `SampleLi`/`PDF_Li`, `SampleLe`, `Phi`) and
@@ -11,6 +12,7 @@
 
 mod area;
 mod distant;
+mod environment;
 mod point;
 pub mod portal;
 mod set;
@@ -18,6 +20,7 @@ mod spot;
 
 pub use area::{AreaLights, EmitterTriangle};
 pub use distant::DistantLight;
+pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
 pub use portal::Portal;
 pub use set::{Emission, Emitter, LightSet};
@@ -29,7 +32,7 @@ use crate::sampling::Distribution1D;
 use glam::Vec3;
 
 /// A light given explicitly in the scene file.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum LightDesc {
     /// Isotropic point light; `intensity` in W/sr per channel.
     Point { position: Vec3, intensity: Vec3 },
@@ -39,6 +42,9 @@ pub enum LightDesc {
     /// Sun-like light from infinitely far; `direction` (unit) is the way the light travels,
     /// `irradiance` in W/m^2 on a surface perpendicular to it.
     Distant { direction: Vec3, irradiance: Vec3 },
+    /// Radiance from every direction at infinity: `radiance` times the equirectangular `map`
+    /// (if any), the sky turned by `to_world` (a rotation).
+    Environment { radiance: Vec3, map: Option<EnvironmentMap>, to_world: glam::Mat3 },
 }
 
 /// A direction toward a light from a receiving point, for next-event estimation.
@@ -97,6 +103,7 @@ pub enum Light {
     Point(PointLight),
     Spot(SpotLight),
     Distant(DistantLight),
+    Environment(EnvironmentLight),
     /// All emissive triangles of the mesh.
     Area(AreaLights),
 }
@@ -133,7 +140,7 @@ pub fn power_distribution(lights: &[Light]) -> Distribution1D {
 impl Light {
     /// The light described by `desc` (a distant light still needs [`Light::preprocess`]).
     pub fn from_desc(desc: &LightDesc) -> Light {
-        match *desc {
+        match desc.clone() {
             LightDesc::Point { position, intensity } => Light::Point(PointLight { position, intensity }),
             LightDesc::Spot { position, direction, intensity, cone_deg, falloff_deg } => {
                 Light::Spot(SpotLight::new(position, direction, intensity, cone_deg, falloff_deg))
@@ -141,20 +148,25 @@ impl Light {
             LightDesc::Distant { direction, irradiance } => {
                 Light::Distant(DistantLight::new(direction, irradiance))
             }
+            LightDesc::Environment { radiance, map, to_world } => {
+                Light::Environment(EnvironmentLight::new(radiance, map.map(|m| m.0), to_world))
+            }
         }
     }
 
     /// Lets a light adapt to the scene (distant lights record the bounding sphere and the
     /// portals).
     pub fn preprocess(&mut self, scene_bounds: Aabb, portals: &[Portal]) {
-        if let Light::Distant(d) = self {
-            d.preprocess(scene_bounds, portals);
+        match self {
+            Light::Distant(d) => d.preprocess(scene_bounds, portals),
+            Light::Environment(e) => e.preprocess(scene_bounds),
+            _ => {}
         }
     }
 
     /// Whether the light is a delta light (cannot be hit by rays, no MIS).
     pub fn is_delta(&self) -> bool {
-        !matches!(self, Light::Area(_))
+        !matches!(self, Light::Area(_) | Light::Environment(_))
     }
 
     /// Total emitted flux per channel (W).
@@ -163,6 +175,7 @@ impl Light {
             Light::Point(l) => l.power(),
             Light::Spot(l) => l.power(),
             Light::Distant(l) => l.power(),
+            Light::Environment(l) => l.power(),
             Light::Area(l) => l.power(),
         }
     }
@@ -173,6 +186,7 @@ impl Light {
             Light::Point(l) => l.sample_li(p),
             Light::Spot(l) => l.sample_li(p),
             Light::Distant(l) => l.sample_li(p),
+            Light::Environment(l) => l.sample_li(u),
             Light::Area(l) => l.sample_li(p, u),
         }
     }
@@ -186,13 +200,14 @@ impl Light {
         }
     }
 
-    /// A photon: `u1` chooses the position (area, distant), `u2` the direction (point, spot,
-    /// area). Photons of one light all carry the same power (equal luminance for area lights).
+    /// A photon: `u1` chooses the position (area, distant, environment), `u2` the direction
+    /// (point, spot, area, environment). Photons of one light all carry the same power (equal luminance for area lights).
     pub fn sample_emission(&self, u1: [f32; 2], u2: [f32; 2]) -> Option<EmissionSample> {
         match self {
             Light::Point(l) => l.sample_emission(u2),
             Light::Spot(l) => l.sample_emission(u2),
             Light::Distant(l) => l.sample_emission(u1),
+            Light::Environment(l) => l.sample_emission(u1, u2),
             Light::Area(l) => l.sample_emission(u1, u2),
         }
     }

@@ -37,6 +37,7 @@ pub struct LightSet {
     select: Distribution1D,
     emitters: Vec<Emitter>,
     area: Option<usize>,
+    environment: Option<usize>,
     /// The portals distant lights emit through (and the photon pass cuts at).
     portals: Vec<Portal>,
 }
@@ -64,7 +65,11 @@ impl LightSet {
         let select = power_distribution(&lights);
         let mut emitters = Vec::new();
         let mut area = None;
+        let mut environment = None;
         for (i, l) in lights.iter().enumerate() {
+            if matches!(l, Light::Environment(_)) {
+                environment = Some(i);
+            }
             match l {
                 Light::Area(a) => {
                     area = Some(i);
@@ -81,7 +86,7 @@ impl LightSet {
             }
         }
         emitters.retain(|e| e.power.max_element() > 0.0 && e.power.is_finite());
-        LightSet { lights, select, emitters, area, portals: portals.to_vec() }
+        LightSet { lights, select, emitters, area, environment, portals: portals.to_vec() }
     }
 
     /// Whether there is nothing to sample.
@@ -94,9 +99,33 @@ impl LightSet {
         &self.portals
     }
 
-    /// Whether some triangles emit (so BSDF-sampled rays can find light).
+    /// Whether some triangles emit.
     pub fn has_area(&self) -> bool {
         self.area.is_some()
+    }
+
+    /// Whether BSDF-sampled rays can find light: emissive triangles, or a sky to escape to.
+    pub fn has_hittable(&self) -> bool {
+        self.area.is_some() || self.environment.is_some()
+    }
+
+    /// Radiance a ray leaving the scene along `dir` (unit) sees: the sky's, or zero.
+    #[inline]
+    pub fn escaped(&self, dir: Vec3) -> Vec3 {
+        match self.environment.map(|i| &self.lights[i]) {
+            Some(Light::Environment(e)) => e.radiance_toward(dir),
+            _ => Vec3::ZERO,
+        }
+    }
+
+    /// Density with which [`LightSet::sample_li`] picks the sky along `dir` (pick included);
+    /// zero without a sky.
+    #[inline]
+    pub fn pdf_li_escaped(&self, dir: Vec3) -> f32 {
+        match self.environment.map(|i| (i, &self.lights[i])) {
+            Some((i, Light::Environment(e))) => self.select.pmf(i) * e.pdf(dir),
+            _ => 0.0,
+        }
     }
 
     pub fn lights(&self) -> &[Light] {

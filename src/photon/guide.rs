@@ -115,8 +115,7 @@ impl VisibleRegion {
                     // spreads over the aperture (a pinhole ignores it).
                     let ray = cam.lens_ray(x, y, halton2_lens((j * sw + i) as u64, [0.0; 2]));
                     let start = Start::Ray(ray);
-                    let landing =
-                        walk(frame, start, Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _, _, _| {});
+                    let landing = walk(frame, start, Vec3::ONE, 64, &mut rng, &mut c, |_| {}, |_, _| {});
                     if let Some(l) = landing {
                         // The pixel's footprint, widened by the lens's blur there.
                         let mut footprint = (l.hit.p - cam.eye).length() * spread;

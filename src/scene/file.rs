@@ -226,6 +226,13 @@ pub enum LightEntry {
         direction: [f32; 3],
         irradiance: [f32; 3],
     },
+    /// The sky: `radiance` (default 1) times the equirectangular image `map` (relative to the
+    /// scene file; EXR or HDR, or any texture format), or `radiance` alone; turned by `rotate`.
+    Environment {
+        radiance: Option<[f32; 3]>,
+        map: Option<std::path::PathBuf>,
+        rotate: Option<Rotate>,
+    },
 }
 
 impl SceneFile {

@@ -22,9 +22,9 @@ pub use obj::{MtlMap, MtlMaterial};
 
 use crate::config::RenderSettings;
 use crate::geometry::{Aabb, TriangleMesh, VertexAttributes};
-use crate::light::{LightDesc, Portal};
+use crate::light::{EnvironmentMap, LightDesc, Portal};
 use crate::material::Material;
-use crate::texture::Textures;
+use crate::texture::{Texture, Textures};
 use file::{finite3, nonneg3};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
@@ -174,7 +174,7 @@ impl Scene {
         for l in &mut s.lights {
             match l {
                 LightDesc::Point { position, .. } | LightDesc::Spot { position, .. } => *position -= c,
-                LightDesc::Distant { .. } => {}
+                LightDesc::Distant { .. } | LightDesc::Environment { .. } => {}
             }
         }
         for p in &mut s.portals {
@@ -252,6 +252,22 @@ fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError>
             direction: unit("direction", direction)?,
             irradiance: nonneg3(path, &f("irradiance"), irradiance)?,
         },
+        LightEntry::Environment { radiance, ref map, ref rotate } => {
+            let radiance = nonneg3(path, &f("radiance"), radiance.unwrap_or([1.0; 3]))?;
+            let map = match map {
+                None => None,
+                Some(m) => {
+                    let t = Texture::load(&obj::relative_to(path, m))
+                        .map_err(|e| SceneError::field(path, f("map"), e))?;
+                    Some(EnvironmentMap(std::sync::Arc::new(t)))
+                }
+            };
+            let to_world = match rotate {
+                None => glam::Mat3::IDENTITY,
+                Some(r) => transform::rotation_of(path, &f("rotate"), r)?.as_mat3(),
+            };
+            LightDesc::Environment { radiance, map, to_world }
+        }
     })
 }
 

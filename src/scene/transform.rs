@@ -48,9 +48,7 @@ pub fn apply(
         (None, Some(rotate)) => {
             let scale = scale(path, i, entry.scale)?;
             let mut linear = DMat3::from_diagonal(scale.as_dvec3());
-            for (field, r) in rotations(i, rotate) {
-                linear = rotation(path, &field, r)? * linear;
-            }
+            linear = rotation_of(path, &format!("mesh[{i}].rotate"), rotate)? * linear;
             let translate =
                 finite3(path, &format!("mesh[{i}].translate"), entry.translate.unwrap_or([0.0; 3]))?;
             affine(mesh, attributes, linear, translate.as_dvec3())
@@ -91,14 +89,15 @@ fn scale(path: &Path, i: usize, scale: Option<Scale>) -> Result<Vec3, SceneError
     Ok(scale)
 }
 
-/// The rotations of `rotate` in the order they apply, each with its field name
-/// (`mesh[i].rotate` or `mesh[i].rotate[k]`).
-fn rotations(i: usize, rotate: &Rotate) -> Vec<(String, &Rotation)> {
+/// The matrix of `rotate` (field `field`, e.g. `mesh[i].rotate`): its rotations composed in
+/// the order they are listed, each checked under its own name (`field` or `field[k]`).
+pub fn rotation_of(path: &Path, field: &str, rotate: &Rotate) -> Result<DMat3, SceneError> {
     match rotate {
-        Rotate::One(r) => vec![(format!("mesh[{i}].rotate"), r)],
-        Rotate::Many(list) => {
-            list.iter().enumerate().map(|(k, r)| (format!("mesh[{i}].rotate[{k}]"), r)).collect()
-        }
+        Rotate::One(r) => rotation(path, field, r),
+        Rotate::Many(list) => list
+            .iter()
+            .enumerate()
+            .try_fold(DMat3::IDENTITY, |m, (k, r)| Ok(rotation(path, &format!("{field}[{k}]"), r)? * m)),
     }
 }
 
