@@ -6,9 +6,12 @@
         [--small-dir tests/data/refs] [--compare OURS.exr] [--seed S]
 
 Reads OUR scene file (TOML + OBJ + MTL, scenes/SCENES.md conventions) and builds the Mitsuba
-scene itself: the OBJ is parsed here (Mitsuba's OBJ loader ignores `usemtl`), faces are grouped
-by material and each group becomes one `mi.Mesh` without vertex normals (flat shading: Mitsuba
-then shades with the face normal n = (v1 - v0) x (v2 - v0), as we do). Mapping (exact, or refused):
+scene itself: the OBJ is parsed here (Mitsuba's OBJ loader ignores `usemtl`) as
+src/scene/obj.rs parses it (one vertex per distinct v/vt/vn corner, a triangle with normals
+wound to their side), faces are grouped by material and each group becomes one `mi.Mesh`, with
+vertex normals and texture coordinates when its triangles have them (all or none; flat
+triangles are shaded with the face normal n = (v1 - v0) x (v2 - v0), as we do). Mapping (exact,
+or refused):
 
     diffuse   -> twosided(diffuse kd)
     mirror    -> conductor, material "none", specular_reflectance ks (1: reflectance exactly 1)
@@ -16,6 +19,10 @@ then shades with the face normal n = (v1 - v0) x (v2 - v0), as we do). Mapping (
     emissive  -> area emitter, radiance ke (front side only) + twosided(diffuse kd)
     point     -> point, intensity (W/sr)
     distant   -> directional, direction = the way the light travels (as ours), irradiance (W/m^2)
+    environment -> constant (radiance), or envmap of the image times radiance, to_world = the
+                 rotation (Mitsuba's equirectangular mapping is ours)
+    map_Kd / kd_texture -> bitmap reflectance, bilinear, repeat (8-bit sRGB-decoded; v flipped
+                 to Mitsuba's top-down convention); other maps and map options are refused
     camera    -> perspective, fov_axis y, look_at, hdrfilm rgb float32, box rfilter;
                  with aperture_radius > 0: thinlens (aperture_radius, focus_distance: the same
                  names and meaning; focus_distance defaults to |target - eye| as ours)
@@ -52,6 +59,9 @@ from pathlib import Path
 import numpy as np
 
 
+SCENE_DIR = ["."]
+
+
 class Refused(Exception):
     """Something in the scene that Mitsuba cannot be given exactly."""
 
@@ -80,13 +90,23 @@ def parse_mtl(path):
             cur["ni"] = float(w[1])
         elif key == "illum":
             cur["illum"] = int(w[1])
+        elif key.lower() == "map_kd":
+            if any(x.startswith("-") for x in w[1:]):
+                raise Refused(f"{path}:{lineno}: map_Kd options are not reproduced here")
+            cur["kd_texture"] = str(path.parent / " ".join(w[1:]))
+        elif key.lower().startswith("map_") or key.lower() in ("bump", "norm", "disp", "decal", "refl"):
+            raise Refused(f"{path}:{lineno}: {key} is not reproduced here")
     return mats
 
 
 def parse_obj(path):
-    """Vertices (n x 3 float64), triangles (m x 3, 0-based, fans), and per triangle its
-    material name (None without `usemtl`), plus the materials of its `mtllib`s."""
-    verts, tris, tri_mat, mtl = [], [], [], {}
+    """As src/scene/obj.rs reads an OBJ: vertices (n x 3 float64, one per distinct v/vt/vn
+    corner), triangles (m x 3, fans), per triangle its material name (None without
+    `usemtl`), the materials of its `mtllib`s, and per vertex its normal (n x 3, zero where a
+    corner has none; None when no corner has one) and texture coordinates (n x 2 or None).
+    A triangle whose three corners have normals is wound to face their side."""
+    v, vt, vn = [], [], []
+    faces, tri_mat, mtl = [], [], {}
     material = None
     for lineno, raw in enumerate(path.read_text().splitlines(), 1):
         w = raw.split()
@@ -96,34 +116,59 @@ def parse_obj(path):
         if key == "v":
             if len(w) not in (4, 5, 7):
                 raise Refused(f"{path}:{lineno}: vertex with {len(w) - 1} numbers")
-            if len(w) == 5 and float(w[4]) != 1.0:
-                raise Refused(f"{path}:{lineno}: vertex with w != 1")
-            verts.append([float(x) for x in w[1:4]])
+            v.append([float(x) for x in w[1:4]])
+        elif key == "vt":
+            vt.append([float(x) for x in w[1:3]])
+        elif key == "vn":
+            n = np.array([float(x) for x in w[1:4]])
+            length = np.linalg.norm(n)
+            vn.append(n / length if length > 0 else np.zeros(3))
         elif key == "f":
-            idx = []
+            corners = []
             for ref in w[1:]:
-                i = int(ref.split("/")[0])
-                idx.append(i - 1 if i > 0 else len(verts) + i)
-            if len(idx) < 3 or not all(0 <= i < len(verts) for i in idx):
+                parts = ref.split("/") + ["", ""]
+                def index(text, count):
+                    if text == "":
+                        return -1
+                    i = int(text)
+                    return i - 1 if i > 0 else count + i
+                corners.append((index(parts[0], len(v)), index(parts[1], len(vt)), index(parts[2], len(vn))))
+            if len(corners) < 3 or not all(0 <= c[0] < len(v) for c in corners):
                 raise Refused(f"{path}:{lineno}: bad face")
-            for k in range(1, len(idx) - 1):  # fan, as tobj triangulates: (0,1,2),(0,2,3),...
-                tris.append((idx[0], idx[k], idx[k + 1]))
+            for k in range(1, len(corners) - 1):  # fan: (0,1,2),(0,2,3),...
+                faces.append((corners[0], corners[k], corners[k + 1]))
                 tri_mat.append(material)
         elif key == "usemtl":
             material = raw.split(None, 1)[1].strip()
         elif key == "mtllib":
-            for name in raw.split(None, 1)[1].split():
-                for k, v in parse_mtl(path.parent / name).items():
-                    mtl.setdefault(k, v)
-        elif key in ("vn", "vt"):
-            pass  # ignored: we shade flat, as the renderer does
-        elif key in ("o", "g", "s"):
+            for k, m in parse_mtl(path.parent / raw.split(None, 1)[1].strip()).items():
+                mtl.setdefault(k, m)
+        elif key in ("o", "g", "s", "l"):
             pass
-        elif key == "l":
-            pass  # polylines are not rendered
         else:
             raise Refused(f"{path}:{lineno}: unknown OBJ statement {key!r}")
-    return np.array(verts, dtype=np.float64).reshape(-1, 3), np.array(tris, dtype=np.int64).reshape(-1, 3), tri_mat, mtl
+    has_uv = any(c[1] >= 0 for f in faces for c in f)
+    has_n = any(c[2] >= 0 and np.any(vn[c[2]]) for f in faces for c in f)
+    verts, normals, uvs, tris, ids = [], [], [], [], {}
+    for f in faces:
+        tri = []
+        for c in f:
+            key = (c[0], c[1] if has_uv else -1, c[2] if has_n else -1)
+            if key not in ids:
+                ids[key] = len(verts)
+                verts.append(v[c[0]])
+                normals.append(vn[c[2]] if key[2] >= 0 else np.zeros(3))
+                uvs.append(vt[c[1]] if key[1] >= 0 else [0.0, 0.0])
+            tri.append(ids[key])
+        if has_n:
+            ns = [normals[i] for i in tri]
+            a, b, c2 = (np.array(verts[i]) for i in tri)
+            if all(np.any(n) for n in ns) and np.dot(np.cross(b - a, c2 - a), sum(ns)) < 0:
+                tri = [tri[0], tri[2], tri[1]]
+        tris.append(tri)
+    return (np.array(verts, dtype=np.float64).reshape(-1, 3), np.array(tris, dtype=np.int64).reshape(-1, 3),
+            tri_mat, mtl, np.array(normals).reshape(-1, 3) if has_n else None,
+            np.array(uvs, dtype=np.float64).reshape(-1, 2) if has_uv else None)
 
 
 def mtl_kind(m):
@@ -152,6 +197,10 @@ def resolve_material(name, mtl, entry):
     m = {"type": kind}
     if kind in ("diffuse", "emissive", "glossy"):
         m["kd"] = pick("kd", [0.0, 0.0, 0.0])
+        if "kd_texture" in entry:
+            m["kd_texture"] = str(Path(SCENE_DIR[0]) / entry["kd_texture"])
+        elif "kd_texture" in mtl:
+            m["kd_texture"] = mtl["kd_texture"]
     if kind == "emissive":
         m["ke"] = pick("ke", [0.0, 0.0, 0.0])
     if kind == "mirror":
@@ -197,6 +246,7 @@ def mesh_transform(i, mesh):
 def load_scene(toml_path):
     """Camera, {material name: (material, vertices, triangles)}, lights, as our loader sees them."""
     toml_path = Path(toml_path)
+    SCENE_DIR[0] = str(toml_path.parent)
     scene = tomllib.loads(toml_path.read_text())
     # [[portal]] only changes where our photons are sent, not the light: nothing to give Mitsuba.
     unknown = set(scene) - {"camera", "mesh", "materials", "light", "render", "portal"}
@@ -208,9 +258,13 @@ def load_scene(toml_path):
         unknown = set(mesh) - {"obj", "material", "scale", "rotate", "translate", "matrix"}
         if unknown:
             raise Refused(f"mesh[{i}]: unknown keys {sorted(unknown)}")
-        verts, tris, tri_mat, mtl = parse_obj(toml_path.parent / mesh["obj"])
+        verts, tris, tri_mat, mtl, normals, uvs = parse_obj(toml_path.parent / mesh["obj"])
         linear, translate = mesh_transform(i, mesh)
         verts = verts @ linear.T + translate
+        if normals is not None:  # by the inverse transpose, zeros kept
+            normals = normals @ np.linalg.inv(linear)
+            length = np.linalg.norm(normals, axis=1, keepdims=True)
+            normals = np.where(length > 0, normals / np.where(length > 0, length, 1), 0.0)
         if np.linalg.det(linear) < 0:  # a mirroring transform flips the winding; the renderer restores it
             tris = tris[:, [0, 2, 1]]
         if "material" in mesh:
@@ -223,21 +277,32 @@ def load_scene(toml_path):
             used = np.unique(sel)
             remap = np.full(len(verts), -1, dtype=np.int64)
             remap[used] = np.arange(len(used))
-            groups.setdefault(name, []).append((verts[used], remap[sel]))
+            groups.setdefault(name, []).append((verts[used], remap[sel],
+                                                None if normals is None else normals[used],
+                                                None if uvs is None else uvs[used]))
     out = {}
     for name, pieces in groups.items():
         real = None if name == "\0default" else name
         material = resolve_material(real, mtl_all.get(real), entries.get(real))
-        vs, ts, base = [], [], 0
-        for v, t in pieces:
+        vs, ts, ns, us, base = [], [], [], [], 0
+        for v, t, n, u in pieces:
             vs.append(v)
             ts.append(t + base)
+            ns.append(n)
+            us.append(u)
             base += len(v)
-        out[real or "(default grey)"] = (material, np.concatenate(vs), np.concatenate(ts))
+        def joined(parts, width, what):
+            if all(p is None for p in parts):
+                return None
+            if any(p is None for p in parts) or (what == "normals" and not np.all(np.any(np.concatenate(parts), axis=1))):
+                raise Refused(f"material {name}: some of its triangles have vertex {what} and some not")
+            return np.concatenate(parts).reshape(-1, width)
+        out[real or "(default grey)"] = (material, np.concatenate(vs), np.concatenate(ts),
+                                         joined(ns, 3, "normals"), joined(us, 2, "texture coordinates"))
     lights = scene.get("light", [])
     for light in lights:
-        if light.get("type") not in ("point", "distant"):
-            raise Refused(f"light type {light.get('type')!r}: only point and distant map exactly")
+        if light.get("type") not in ("point", "distant", "environment"):
+            raise Refused(f"light type {light.get('type')!r}: only point, distant and environment map exactly")
     return scene["camera"], out, lights
 
 
@@ -251,7 +316,12 @@ def rgb(v):
 
 def bsdf_dict(m):
     if m["type"] in ("diffuse", "emissive"):
-        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": rgb(m["kd"])}}
+        reflectance = rgb(m["kd"])
+        if "kd_texture" in m:
+            # 8-bit images are sRGB-decoded (raw false), EXR/HDR linear; bilinear, repeat: as ours.
+            reflectance = {"type": "bitmap", "filename": m["kd_texture"], "filter_type": "bilinear",
+                           "wrap_mode": "repeat"}
+        return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": reflectance}}
     if m["type"] == "mirror":
         return {"type": "conductor", "material": "none", "specular_reflectance": rgb(m["ks"])}
     if m["type"] == "glass":
@@ -296,16 +366,22 @@ def build(mi, camera, groups, lights, spp):
         "integrator": {"type": "path", "max_depth": -1, "rr_depth": 5, "hide_emitters": False},
         "sensor": sensor_dict(mi, camera, camera["eye"], camera["target"], camera["up"], spp),
     }
-    for k, (name, (m, v, t)) in enumerate(groups.items()):
+    for k, (name, (m, v, t, n, uv)) in enumerate(groups.items()):
         props = mi.Properties()
         props["bsdf"] = mi.load_dict(bsdf_dict(m))
         if m["type"] == "emissive" and max(m["ke"]) > 0:
             props["emitter"] = mi.load_dict({"type": "area", "radiance": rgb(m["ke"])})
-        mesh = mi.Mesh(f"m{k}_{name}", len(v), len(t), props, has_vertex_normals=False,
-                       has_vertex_texcoords=False)
+        mesh = mi.Mesh(f"m{k}_{name}", len(v), len(t), props, has_vertex_normals=n is not None,
+                       has_vertex_texcoords=uv is not None)
         params = mi.traverse(mesh)
         params["vertex_positions"] = type(params["vertex_positions"])(v.astype(np.float32).ravel())
         params["faces"] = type(params["faces"])(t.astype(np.uint32).ravel())
+        if n is not None:
+            params["vertex_normals"] = type(params["vertex_normals"])(n.astype(np.float32).ravel())
+        if uv is not None:
+            # Ours have v up (v = 0 the image's bottom row); Mitsuba's bitmaps have v = 0 at the top.
+            flipped = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1)
+            params["vertex_texcoords"] = type(params["vertex_texcoords"])(flipped.astype(np.float32).ravel())
         params.update()
         scene[f"mesh{k}"] = mesh
     for k, light in enumerate(lights):
@@ -318,6 +394,24 @@ def build(mi, camera, groups, lights, spp):
             # Mitsuba's `direction` is the way the light propagates, as ours (src/light/distant.rs).
             scene[f"light{k}"] = {"type": "directional", "direction": [float(x) for x in d],
                                   "irradiance": rgb(light["irradiance"])}
+        elif light["type"] == "environment":
+            radiance = [float(x) for x in light.get("radiance", [1.0, 1.0, 1.0])]
+            rotate = light.get("rotate", [])
+            linear = np.eye(3)
+            for r in [rotate] if isinstance(rotate, dict) else rotate:
+                linear = rotation_matrix(r["axis"], r["degrees"]) @ linear
+            to_world = np.eye(4)
+            to_world[:3, :3] = linear
+            if "map" not in light:
+                scene[f"light{k}"] = {"type": "constant", "radiance": rgb(radiance)}
+            else:
+                # Mitsuba's envmap mapping is the one src/light/environment.rs follows; a colour
+                # factor is multiplied into a copy of the image.
+                bitmap = np.array(mi.Bitmap(str(SCENE_DIR[0] + "/" + light["map"])).convert(
+                    mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.Float32, srgb_gamma=False), dtype=np.float32)
+                bitmap = bitmap * np.array(radiance, dtype=np.float32)
+                scene[f"light{k}"] = {"type": "envmap", "bitmap": mi.Bitmap(bitmap),
+                                      "to_world": mi.ScalarTransform4f(to_world.tolist())}
     return mi.load_dict(scene)
 
 
@@ -425,7 +519,7 @@ def main():
         camera, groups, lights = load_scene(args.scene)
     except Refused as e:
         sys.exit(f"{args.scene}: refused: {e}")
-    for mname, (m, v, t) in groups.items():
+    for mname, (m, v, t, _n, _uv) in groups.items():
         log(f"material {mname}: {m['type']}, {len(t)} triangles")
     t0 = time.perf_counter()
     scene = build(mi, camera, groups, lights, 4)
