@@ -25,10 +25,21 @@ pub enum Wrap {
     Clamp,
 }
 
+/// What an image's values stand for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Encoding {
+    /// A colour: 8- and 16-bit values are sRGB-encoded.
+    Colour,
+    /// Data (normal maps, masks): every value is linear.
+    Data,
+}
+
 #[derive(Clone, Debug)]
 enum Texels {
     /// sRGB-encoded RGBA bytes (alpha linear).
     Srgb8(Vec<[u8; 4]>),
+    /// Linear RGBA bytes (`/ 255`).
+    Unorm8(Vec<[u8; 4]>),
     /// Linear RGBA.
     Linear(Vec<Vec4>),
 }
@@ -69,6 +80,11 @@ impl Texture {
     /// Loads the image at `path` (any format the `image` crate reads here: PNG, JPEG, TGA, BMP,
     /// EXR, HDR). The error names the file.
     pub fn load(path: &Path) -> Result<Texture, String> {
+        Texture::load_as(path, Encoding::Colour)
+    }
+
+    /// [`Texture::load`], the values read as `encoding` says.
+    pub fn load_as(path: &Path, encoding: Encoding) -> Result<Texture, String> {
         let reader = image::ImageReader::open(path)
             .map_err(|e| format!("texture {}: {e}", path.display()))?
             .with_guessed_format()
@@ -88,19 +104,24 @@ impl Texture {
             .map_err(|e| format!("texture {}: {e}", path.display()))?
             .decode()
             .map_err(|e| format!("texture {}: {e}", path.display()))?;
-        Ok(Texture::from_image(path, image))
+        Ok(Texture::from_image(path, image, encoding))
     }
 
-    fn from_image(path: &Path, image: image::DynamicImage) -> Texture {
+    fn from_image(path: &Path, image: image::DynamicImage, encoding: Encoding) -> Texture {
         use image::DynamicImage as D;
         let (width, height) = (image.width(), image.height());
         let texels = match image {
             D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
-                Texels::Srgb8(image.into_rgba8().pixels().map(|p| p.0).collect())
+                let bytes = image.into_rgba8().pixels().map(|p| p.0).collect();
+                match encoding {
+                    Encoding::Colour => Texels::Srgb8(bytes),
+                    Encoding::Data => Texels::Unorm8(bytes),
+                }
             }
             other => {
-                // 16-bit PNGs are sRGB-encoded like 8-bit ones; float images are linear.
-                let float = matches!(other, D::ImageRgb32F(_) | D::ImageRgba32F(_));
+                // 16-bit PNGs are sRGB-encoded colours like 8-bit ones; float images are linear.
+                let float =
+                    matches!(other, D::ImageRgb32F(_) | D::ImageRgba32F(_)) || encoding == Encoding::Data;
                 Texels::Linear(
                     other
                         .into_rgba32f()
@@ -136,7 +157,7 @@ impl Texture {
     /// Bytes the texels take.
     pub fn bytes(&self) -> usize {
         match &self.texels {
-            Texels::Srgb8(t) => t.len() * 4,
+            Texels::Srgb8(t) | Texels::Unorm8(t) => t.len() * 4,
             Texels::Linear(t) => t.len() * 16,
         }
     }
@@ -150,6 +171,7 @@ impl Texture {
                 let s = srgb_table();
                 Vec4::new(s[r as usize], s[g as usize], s[b as usize], a as f32 / 255.0)
             }
+            Texels::Unorm8(t) => Vec4::from_array(t[i].map(|c| c as f32 / 255.0)),
             Texels::Linear(t) => t[i],
         }
     }
@@ -175,6 +197,16 @@ impl Texture {
         let top = self.texel(xa, ya).lerp(self.texel(xb, ya), fx);
         let bottom = self.texel(xa, yb).lerp(self.texel(xb, yb), fx);
         top.lerp(bottom, fy)
+    }
+
+    /// Whether every texel is grey (red, green and blue equal): a height map, not a normal map.
+    pub fn is_grey(&self) -> bool {
+        (0..self.height).all(|y| {
+            (0..self.width).all(|x| {
+                let t = self.texel(x, y);
+                t.x == t.y && t.y == t.z
+            })
+        })
     }
 
     /// The mean linear RGB over the image.
@@ -203,17 +235,23 @@ fn srgb_decode(c: f32) -> f32 {
 #[derive(Clone, Debug, Default)]
 pub struct Textures {
     pub list: Vec<Texture>,
-    by_path: HashMap<PathBuf, u32>,
+    by_path: HashMap<(PathBuf, Encoding), u32>,
 }
 
 impl Textures {
     /// The index of the texture at `path`, loading it the first time it is asked for.
     pub fn get_or_load(&mut self, path: &Path) -> Result<u32, String> {
-        let key = std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned());
+        self.get_or_load_as(path, Encoding::Colour)
+    }
+
+    /// [`Textures::get_or_load`] for an image of `encoding` (a file read both ways is two
+    /// textures).
+    pub fn get_or_load_as(&mut self, path: &Path, encoding: Encoding) -> Result<u32, String> {
+        let key = (std::fs::canonicalize(path).unwrap_or_else(|_| path.to_owned()), encoding);
         if let Some(&i) = self.by_path.get(&key) {
             return Ok(i);
         }
-        let t = Texture::load(path)?;
+        let t = Texture::load_as(path, encoding)?;
         let i = self.list.len() as u32;
         self.list.push(t);
         self.by_path.insert(key, i);

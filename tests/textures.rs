@@ -201,3 +201,60 @@ fn photons_bleed_the_texture_colour_as_the_path_tracer_does() {
     // The red the floor shows is the texture's, not the wall's Kd (white).
     assert!(mp.x > 1.1 * mp.z, "the floor by the wall should be reddish: {mp:?}");
 }
+
+/// A floor (y = 0, `u` along +X) with a normal map that leans every normal `tilt` degrees
+/// toward +u, lit by a distant light from `toward_light` (unit), seen from above.
+fn mapped_floor(dir: &Path, tilt: Option<f32>, toward_light: Vec3) -> Scene {
+    let mut mtl = "newmtl floor\nKd 0.5 0.5 0.5\n".to_string();
+    if let Some(deg) = tilt {
+        let (s, c) = deg.to_radians().sin_cos();
+        // Linear data in an EXR: exactly (sin, 0, cos) after 2 c - 1.
+        let texel = Vec3::new(0.5 * s + 0.5, 0.5, 0.5 * c + 0.5);
+        Film { width: 2, height: 2, pixels: vec![texel; 4] }.write_exr(&dir.join("normal.exr")).unwrap();
+        mtl += "norm normal.exr\n";
+    }
+    std::fs::write(dir.join("floor.mtl"), mtl).unwrap();
+    std::fs::write(
+        dir.join("floor.obj"),
+        "mtllib floor.mtl\nusemtl floor\nv -1 0 1\nv 1 0 1\nv 1 0 -1\nv -1 0 -1\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n",
+    )
+    .unwrap();
+    let d = -toward_light;
+    std::fs::write(
+        dir.join("s.toml"),
+        format!(
+            "[camera]\neye = [0.0, 3.0, 0.001]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 0.0, -1.0]\nvfov_deg = 20.0\nwidth = 8\nheight = 8\n\n[[mesh]]\nobj = \"floor.obj\"\n\n[[light]]\ntype = \"distant\"\ndirection = [{}, {}, {}]\nirradiance = [3.14159265, 3.14159265, 3.14159265]\n",
+            d.x, d.y, d.z
+        ),
+    )
+    .unwrap();
+    Scene::load(dir.join("s.toml")).unwrap()
+}
+
+#[test]
+fn a_normal_map_leans_the_shading_normal_its_way() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = RenderSettings { spp: Some(4), photons: Some(1000), seed: Some(1), ..Default::default() };
+    let mean = |tilt, light: Vec3| {
+        render_checked(&mapped_floor(dir.path(), tilt, light.normalize()), &s, 8).film.mean()
+    };
+    // Lambertian: radiance kd E cos / π = 0.5 cos(angle between the bent normal and the light).
+    let from_east = Vec3::new(1.0, 1.0, 0.0);
+    let from_west = Vec3::new(-1.0, 1.0, 0.0);
+    let cases = [
+        (None, from_east, 0.5 * 45f32.to_radians().cos()),
+        (Some(30.0), Vec3::Y, 0.5 * 30f32.to_radians().cos()),
+        (Some(30.0), from_east, 0.5 * 15f32.to_radians().cos()),
+        (Some(30.0), from_west, 0.5 * 75f32.to_radians().cos()),
+    ];
+    for (tilt, light, expected) in cases {
+        let m = mean(tilt, light);
+        println!("tilt {tilt:?}, light from {light}: {m:.5}, expected {expected:.5}");
+        assert!((m - expected as f64).abs() < 2e-3, "tilt {tilt:?}, light {light}: {m} vs {expected}");
+    }
+    assert!(render_checked(&mapped_floor(dir.path(), Some(30.0), Vec3::Y), &s, 8)
+        .film
+        .pixels
+        .iter()
+        .all(|p| p.is_finite()));
+}

@@ -3,7 +3,7 @@
 use crate::accel::Hit;
 use crate::geometry::{gamma, offset_ray_origin};
 use crate::material::{face_forward, Normals};
-use crate::scene::Scene;
+use crate::scene::{Scene, TextureRef};
 use glam::{Vec2, Vec3};
 
 /// A surface point reached by a ray.
@@ -26,6 +26,36 @@ pub struct SurfaceHit {
     pub lifted: Vec3,
     pub prim: u32,
     pub t: f32,
+}
+
+/// The shading normal `ns` bent by a tangent-space normal map at `uv`: the map's `2 c - 1`
+/// in the frame of the triangle's `dp/du` (made perpendicular to `ns`), `dp/dv` and `ns`.
+/// `None` where the triangle's texture coordinates are degenerate or the result would face
+/// away from the face.
+fn normal_mapped(
+    scene: &Scene,
+    tri: [u32; 3],
+    n: Vec3,
+    ns: Vec3,
+    uv: Vec2,
+    map: &TextureRef,
+) -> Option<Vec3> {
+    let a = &scene.attributes;
+    let [p0, p1, p2] = tri.map(|i| scene.mesh.positions[i as usize]);
+    let [t0, t1, t2] = tri.map(|i| a.uvs[i as usize]);
+    let (dp1, dp2, d1, d2) = (p1 - p0, p2 - p0, t1 - t0, t2 - t0);
+    let det = d1.x * d2.y - d2.x * d1.y;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let dpdu = (dp1 * d2.y - dp2 * d1.y) / det;
+    let dpdv = (dp2 * d1.x - dp1 * d2.x) / det;
+    let t = (dpdu - ns * ns.dot(dpdu)).try_normalize()?;
+    // The bitangent keeps the handedness of the texture's (v up) frame.
+    let b = ns.cross(t) * if ns.cross(t).dot(dpdv) < 0.0 { -1.0 } else { 1.0 };
+    let c = map.rgb(&scene.textures, uv) * 2.0 - Vec3::ONE;
+    let bent = (t * c.x + b * c.y + ns * c.z).try_normalize()?;
+    (bent.dot(n) > 0.0).then_some(bent)
 }
 
 impl SurfaceHit {
@@ -54,6 +84,11 @@ impl SurfaceHit {
                     .sum();
                 if (lifted - p).dot(n) > 0.0 && lifted.is_finite() {
                     at.lifted = lifted;
+                }
+            }
+            if scene.textured && a.has_uvs() {
+                if let Some(map) = scene.maps[scene.tri_material[hit.prim as usize] as usize].normal {
+                    at.ns = normal_mapped(scene, tri, n, at.ns, at.uv, &map).unwrap_or(at.ns);
                 }
             }
         }

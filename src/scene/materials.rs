@@ -6,7 +6,7 @@ use super::file::{nonneg3, reflectance3, MaterialEntry, MaterialKind, SceneFile}
 use super::obj::{relative_to, MtlMap, MtlMaterial};
 use super::SceneError;
 use crate::material::Material;
-use crate::texture::{Textures, Wrap};
+use crate::texture::{Encoding, Textures, Wrap};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -164,9 +164,14 @@ pub struct MaterialMaps {
     pub kd: Option<TextureRef>,
     /// `map_Ks` / `ks_texture`: the specular albedo of glossy materials and mirrors.
     pub ks: Option<TextureRef>,
+    /// `norm`, or `map_Bump`/`bump` with a colour image: a tangent-space normal map (`+Z` out
+    /// of the surface, `+X` along increasing `u`, `+Y` along increasing `v`; linear values
+    /// `2 c - 1`) that bends the shading normal.
+    pub normal: Option<TextureRef>,
 }
 
 impl MaterialMaps {
+    /// Whether no texture changes the material's constants (a normal map may still bend it).
     pub fn is_empty(&self) -> bool {
         self.kd.is_none() && self.ks.is_none()
     }
@@ -207,10 +212,12 @@ fn texture_maps(
     let mut maps = MaterialMaps::default();
     let from_mtl = |map: &MtlMap,
                     textures: &mut Textures,
-                    warnings: &mut Vec<String>|
+                    warnings: &mut Vec<String>,
+                    encoding: Encoding|
      -> Result<TextureRef, SceneError> {
         let file = relative_to(&map.mtl, &map.file);
-        let texture = textures.get_or_load(&file).map_err(|e| SceneError::line(&map.mtl, map.line, e))?;
+        let texture =
+            textures.get_or_load_as(&file, encoding).map_err(|e| SceneError::line(&map.mtl, map.line, e))?;
         if !map.ignored.is_empty() {
             warnings.push(format!(
                 "{}:{}: {} options {} are not applied",
@@ -225,8 +232,21 @@ fn texture_maps(
     };
     for map in mtl.map_or(&[][..], |m| &m.maps[..]) {
         match map.keyword.as_str() {
-            "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings)?),
-            "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings)?),
+            "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
+            "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
+            "norm" | "map_bump" | "bump" => {
+                let t = from_mtl(map, textures, warnings, Encoding::Data)?;
+                if textures.get(t.texture).is_grey() {
+                    warnings.push(format!(
+                        "{}:{}: `{}` (material {name}) is a height map: height bump maps are not rendered yet, only normal maps",
+                        map.mtl.display(),
+                        map.line,
+                        map.keyword
+                    ));
+                } else {
+                    maps.normal = Some(t);
+                }
+            }
             other => warnings.push(format!(
                 "{}:{}: `{other}` (material {name}) is not rendered yet; the material is drawn without it",
                 map.mtl.display(),
