@@ -104,7 +104,7 @@ impl SurfaceHit {
     /// The geometric and shading normals, for the BSDF.
     #[inline]
     pub fn normals(&self) -> Normals {
-        Normals { geometric: self.n, shading: self.ns, lifted: self.lifted != self.p }
+        Normals::new(self.n, self.ns, self.lifted != self.p)
     }
 
     /// A robust origin for a ray leaving this point toward `w`: from the lifted point when `w`

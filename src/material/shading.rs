@@ -40,6 +40,8 @@ pub struct Normals {
     /// but in front of the shading normal is light the smooth surface faces, and the shadow
     /// ray from the lifted point decides whether it arrives.
     pub lifted: bool,
+    /// Whether `shading` differs from `geometric` (the flat case takes no detours).
+    pub bent: bool,
 }
 
 /// A sampled direction and the throughput factor it carries.
@@ -54,13 +56,22 @@ impl Normals {
     /// A flat-shaded point.
     #[inline]
     pub fn flat(n: Vec3) -> Normals {
-        Normals { geometric: n, shading: n, lifted: false }
+        Normals { geometric: n, shading: n, lifted: false, bent: false }
+    }
+
+    /// The normals of a point (`bent` worked out here).
+    #[inline]
+    pub fn new(geometric: Vec3, shading: Vec3, lifted: bool) -> Normals {
+        Normals { geometric, shading, lifted, bent: shading != geometric }
     }
 
     /// The normal the BSDF is taken about for a path arriving from `wo`: the shading normal,
     /// unless `wo` is on opposite sides of it and of the face (then the geometric one).
     #[inline]
     pub fn about(&self, wo: Vec3) -> Vec3 {
+        if !self.bent {
+            return self.geometric;
+        }
         if self.shading.dot(wo) * self.geometric.dot(wo) > 0.0 {
             self.shading
         } else {
@@ -91,6 +102,13 @@ impl Normals {
     /// `(eval_cos, 1)` on a smooth one.
     #[inline]
     pub fn eval_parts(&self, m: &Material, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        if !self.bent {
+            let n = self.geometric;
+            if n.dot(wo) * n.dot(wi) <= 0.0 {
+                return (Vec3::ZERO, 0.0);
+            }
+            return (m.eval(n, wo, wi), n.dot(wi).abs());
+        }
         let n = self.about(wo);
         if self.geometric.dot(wo) * self.geometric.dot(wi) <= 0.0 {
             if self.lifted && n != self.geometric && n.dot(wi) * n.dot(wo) > 0.0 {
@@ -141,7 +159,7 @@ impl Normals {
         let n = self.about(wo);
         let mut s = m.sample_mode(n, wo, u_lobe, u, mode)?;
         let mut weight = s.weight(n);
-        if n != self.geometric {
+        if self.bent && n != self.geometric {
             if mode == TransportMode::Importance {
                 let adjoint = (wo.dot(n) * s.wi.dot(self.geometric)) / (wo.dot(self.geometric) * s.wi.dot(n));
                 weight *= adjoint.abs();
@@ -199,7 +217,7 @@ mod tests {
     use super::*;
 
     fn tilted() -> Normals {
-        Normals { geometric: Vec3::Z, shading: Vec3::new(0.3, 0.0, 1.0).normalize(), lifted: false }
+        Normals::new(Vec3::Z, Vec3::new(0.3, 0.0, 1.0).normalize(), false)
     }
 
     /// xorshift uniforms for the sampling checks.
