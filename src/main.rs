@@ -435,6 +435,16 @@ fn info(path: &std::path::Path) -> Result<()> {
     println!("scene      {}", path.display());
     println!("triangles  {}", scene.mesh.len());
     println!("vertices   {}", scene.mesh.positions.len());
+    let a = &scene.attributes;
+    let smooth =
+        if a.has_normals() { a.normals.iter().filter(|n| **n != glam::Vec3::ZERO).count() } else { 0 };
+    println!(
+        "shading    {smooth} vertices with normals, {}",
+        if a.has_uvs() { "texture coordinates" } else { "no texture coordinates" }
+    );
+    for t in &scene.textures.list {
+        println!("texture    {} ({}x{}, {} KB)", t.path.display(), t.width(), t.height(), t.bytes() / 1024);
+    }
     println!("bounds     {:?} .. {:?}", b.min.to_array(), b.max.to_array());
     let lens = scene.camera.lens;
     let lens = if lens.is_pinhole() {
@@ -461,8 +471,15 @@ fn info(path: &std::path::Path) -> Result<()> {
         .collect();
     println!("cameras    {}", cameras.join(", "));
     let count = scene.triangles_per_material();
-    for ((name, m), count) in scene.material_names.iter().zip(&scene.materials).zip(count) {
-        println!("material   {name}: {m:?} ({count} triangles)");
+    for (((name, m), maps), count) in
+        scene.material_names.iter().zip(&scene.materials).zip(&scene.maps).zip(count)
+    {
+        let texture = |what: &str, t: Option<photonmap::scene::TextureRef>| {
+            t.map(|t| format!(", {what} from {}", scene.textures.get(t.texture).path.display()))
+                .unwrap_or_default()
+        };
+        let maps = texture("kd", maps.kd) + &texture("ks", maps.ks) + &texture("normals", maps.normal);
+        println!("material   {name}: {m:?} ({count} triangles{maps})");
     }
     for l in &scene.lights {
         println!("light      {l:?}");

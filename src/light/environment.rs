@@ -24,9 +24,15 @@ use std::f32::consts::PI;
 use std::sync::Arc;
 
 /// An equirectangular image shared by the scene description and the light (compared by
-/// identity).
-#[derive(Clone, Debug)]
+/// identity; shown by its file and size).
+#[derive(Clone)]
 pub struct EnvironmentMap(pub Arc<Texture>);
+
+impl std::fmt::Debug for EnvironmentMap {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} ({}x{})", self.0.path.display(), self.0.width(), self.0.height())
+    }
+}
 
 impl PartialEq for EnvironmentMap {
     fn eq(&self, other: &Self) -> bool {
