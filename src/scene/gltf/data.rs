@@ -10,7 +10,7 @@ use gltf::Document;
 use std::path::Path;
 
 /// The most elements an accessor without a buffer view (all zeros, or sparse) may have.
-const MAX_VIEWLESS: usize = 1 << 24;
+const MAX_VIEWLESS: usize = 1 << 22;
 
 /// Every buffer's bytes, by index.
 pub struct Buffers(pub Vec<Vec<u8>>);

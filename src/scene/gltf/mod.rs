@@ -165,35 +165,58 @@ pub fn load(path: &Path, textures: &mut Textures) -> Result<GltfData, SceneError
 
 /// Parses and validates the JSON (of a `.gltf`, or inside a `.glb`).
 fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
-    gltf::Gltf::from_slice(bytes).map_err(|e| match e {
+    let (json, blob) = if bytes.starts_with(b"glTF") {
+        let glb = gltf::Glb::from_slice(bytes)
+            .map_err(|e| SceneError::file(path, format!("malformed GLB: {e}")))?;
+        (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
+    } else {
+        (bytes.to_vec(), None)
+    };
+    let root = gltf::json::Root::from_slice(&json)
+        .map_err(|e| SceneError::file(path, format!("malformed glTF JSON: {e}")))?;
+    // The `gltf` crate's own validation indexes the accessors with each primitive's POSITION
+    // before checking it (gltf-json 1.4.1, `primitive_validate_hook`): check that first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            for (semantic, index) in &prim.attributes {
+                if index.value() >= root.accessors.len() {
+                    let name = match semantic {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "?".into(),
+                    };
+                    return Err(at(
+                        path,
+                        format!("meshes[{m}].primitives[{p}].attributes[\"{name}\"]"),
+                        format!("index {} out of range ({} accessors)", index.value(), root.accessors.len()),
+                    ));
+                }
+            }
+        }
+    }
+    let document = gltf::Document::from_json(root).map_err(|e| match e {
         gltf::Error::Validation(errors) => {
             let (at_path, error) = &errors[0];
             let more = match errors.len() {
                 1 => String::new(),
                 n => format!(" (and {} more problems)", n - 1),
             };
-            let value = gltf::Gltf::from_slice_without_validation(bytes)
+            let value = serde_json::from_slice::<serde_json::Value>(&json)
                 .ok()
-                .and_then(|g| serde_json::to_value(g.document.as_json()).ok())
                 .and_then(|root| value_at(&root, at_path.as_str()).map(|v| v.to_string()));
+            use gltf::json::validation::Error as E;
             let message = match (error, value) {
-                (gltf::json::validation::Error::IndexOutOfBounds, Some(v)) => {
-                    format!("index {v} out of range")
-                }
-                (gltf::json::validation::Error::IndexOutOfBounds, None) => "index out of range".into(),
-                (gltf::json::validation::Error::Unsupported, _) => {
-                    "an extension photonmap does not read".into()
-                }
-                (gltf::json::validation::Error::Missing, _) => "missing (glTF 2.0 requires it)".into(),
+                (E::IndexOutOfBounds, Some(v)) => format!("index {v} out of range"),
+                (E::IndexOutOfBounds, None) => "index out of range".into(),
+                (E::Unsupported, _) => "an extension photonmap does not read".into(),
+                (E::Missing, _) => "missing (glTF 2.0 requires it)".into(),
                 (e, Some(v)) => format!("{}: {v}", e.to_string().to_lowercase()),
                 (e, None) => e.to_string().to_lowercase(),
             };
             at(path, at_path.as_str(), format!("{message}{more}"))
         }
-        gltf::Error::Deserialize(e) => SceneError::file(path, format!("malformed glTF JSON: {e}")),
-        gltf::Error::Binary(e) => SceneError::file(path, format!("malformed GLB: {e}")),
         e => SceneError::file(path, e.to_string()),
-    })
+    })?;
+    Ok(gltf::Gltf { document, blob })
 }
 
 /// The JSON value at a path in the `gltf` crate's notation (`meshes[0].attributes["POSITION"]`).
@@ -380,6 +403,14 @@ fn camera(
     }
     let f = format!("cameras[{}].perspective", c.index());
     let vfov = p.yfov().to_degrees();
+    let tan_half = (0.5 * p.yfov()).tan();
+    if !(vfov > 0.0 && vfov < 180.0 && tan_half > 0.0 && tan_half.is_finite()) {
+        return Err(at(
+            path,
+            format!("{f}.yfov"),
+            format!("{} rad is not in (0, π), or too small to be used", p.yfov()),
+        ));
+    }
     let aspect = p.aspect_ratio().unwrap_or(1.0);
     if !(aspect.is_finite() && (1e-3..=1e3).contains(&aspect)) {
         return Err(at(path, format!("{f}.aspectRatio"), format!("{aspect} is not in [0.001, 1000]")));
