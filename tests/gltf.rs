@@ -296,9 +296,8 @@ fn node_transforms_compose_parent_matrix_and_child_trs() {
     }
     // (1,2,3) + 2 * (rot (x, y, -z) + (1,0,0)): the vertices at (3,2,3), (3,4,3), (1,2,3).
     assert!((scene.mesh.positions[1] - Vec3::new(3.0, 4.0, 3.0)).length() < 1e-5);
-    // The child mirrors z: the triangle, front +Z before, still faces +Z (the mirror maps the
-    // normal (0,0,1) to (0,0,-1), and the winding is reversed with it... both together keep
-    // the front where the transformed normal points).
+    // The child mirrors z (determinant < 0): the winding is reversed so that the front face
+    // is where the inverse transpose takes the front normal +Z.
     let n = scene.mesh.normal(0).unwrap();
     let want_n = (Mat4::inverse(&world).transpose().transform_vector3(Vec3::Z)).normalize();
     assert!((n - want_n).length() < 1e-5, "front normal {n}, expected {want_n}");
@@ -320,7 +319,7 @@ fn node_transforms_compose_parent_matrix_and_child_trs() {
     assert!((c.up - Vec3::Y).length() < 1e-5);
     assert_eq!((c.width, c.height), (384, 256));
     assert!((c.tan_half_fov - 0.5f32.tan()).abs() < 1e-6);
-    // The material without metallicFactor... set to 0 and default roughness 1: diffuse white.
+    // Metallic 0, default roughness 1 and base colour 1: diffuse white.
     assert_eq!(scene.materials, [Material::Diffuse { kd: Vec3::ONE }]);
 }
 
@@ -388,4 +387,133 @@ fn the_gltf_cornell_box_renders_as_the_obj_one() {
         assert!((ma[k] - mb[k]).abs() < 0.01 * ma[k], "channel {k}: obj {ma} vs gltf {mb}");
     }
     assert!(same_seed <= 1.2 * noise, "RMSE {same_seed} against noise {noise}");
+}
+
+/// One triangle per material of `materials`, seen by a glTF camera.
+fn triangles(dir: &Path, name: &str, materials: Value, extra: Value) -> Scene {
+    let mut g = Gltf::default();
+    let n = materials.as_array().unwrap().len();
+    let mut prims: Vec<Value> = (0..n)
+        .map(|i| {
+            let z = -(i as f32) - 2.0;
+            let tri = [Vec3::new(0.0, 0.0, z), Vec3::new(1.0, 0.0, z), Vec3::new(0.0, 1.0, z)];
+            g.primitive(&tri, None, &[[0, 1, 2]], i)
+        })
+        .collect();
+    // A LINES primitive: warned and skipped.
+    let mut lines = prims[0].clone();
+    lines["mode"] = json!(1);
+    prims.push(lines);
+    let mut top = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 1.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "meshes": [{"primitives": prims}],
+        "materials": materials,
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        top[k] = v.clone();
+    }
+    Scene::load(g.write(dir, name, top)).unwrap()
+}
+
+#[test]
+fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([188, 188, 188])).save(d.join("grey.png")).unwrap();
+    let pbr = |base: [f32; 3], metal: f32, rough: f32| json!({"baseColorFactor": [base[0], base[1], base[2], 1.0], "metallicFactor": metal, "roughnessFactor": rough});
+    let materials = json!([
+        {"name": "mirror", "pbrMetallicRoughness": pbr([0.9, 0.8, 0.7], 1.0, 0.0)},
+        {"name": "metal", "pbrMetallicRoughness": pbr([0.9, 0.8, 0.7], 1.0, 0.5)},
+        {"name": "plastic", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.3)},
+        {"name": "matte", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.7), "alphaMode": "BLEND",
+         "normalTexture": {"index": 0}},
+        {"name": "glass", "pbrMetallicRoughness": pbr([1.0, 1.0, 1.0], 0.0, 0.0),
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.33}}},
+        {"name": "lamp", "pbrMetallicRoughness": pbr([0.2, 0.2, 0.2], 0.0, 1.0), "emissiveFactor": [1.0, 0.5, 0.25],
+         "emissiveTexture": {"index": 0},
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}}
+    ]);
+    let extra = json!({
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength", "KHR_materials_clearcoat"],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "grey.png"}]
+    });
+    let s = triangles(d, "materials", materials, extra);
+    let grey = (((188.0f64 / 255.0 + 0.055) / 1.055).powf(2.4)) as f32;
+    let ns = |r: f32| photonmap::scene::phong_exponent(r);
+    assert!((ns(0.5) - 30.0).abs() < 1e-3 && (ns(0.3) - (2.0 / 0.3f32.powi(4) - 2.0)).abs() < 1e-2);
+    let by_name = |n: &str| s.materials[s.material_names.iter().position(|m| m == n).unwrap()];
+    let base = Vec3::new(0.9, 0.8, 0.7);
+    assert_eq!(by_name("mirror"), Material::Mirror { ks: base });
+    assert_eq!(by_name("metal"), Material::Glossy { kd: Vec3::ZERO, ks: base, ns: ns(0.5) });
+    let colour = Vec3::new(0.5, 0.25, 1.0);
+    assert_eq!(
+        by_name("plastic"),
+        Material::Glossy { kd: colour * 0.96, ks: Vec3::splat(0.04), ns: ns(0.3) }
+    );
+    assert_eq!(by_name("matte"), Material::Diffuse { kd: colour });
+    assert_eq!(by_name("glass"), Material::Glass { ior: 1.33 });
+    match by_name("lamp") {
+        Material::Emissive { kd, ke } => {
+            assert_eq!(kd, Vec3::splat(0.2));
+            assert!((ke - Vec3::new(4.0, 2.0, 1.0) * grey).length() < 1e-5, "{ke}");
+        }
+        other => panic!("lamp: {other:?}"),
+    }
+    assert_eq!(s.mesh.len(), 6, "the LINES primitive is skipped");
+    let warnings = s.warnings.join("\n");
+    for want in [
+        "KHR_materials_clearcoat is not read",
+        "alphaMode Blend (material matte)",
+        "normalTexture (material matte) is not rendered",
+        "emissive texture averaged",
+        "mode Lines is not drawn",
+    ] {
+        assert!(warnings.contains(want), "no warning `{want}` in:\n{warnings}");
+    }
+    assert_eq!(s.warnings.len(), 5, "{warnings}");
+    assert_eq!((s.camera.width, s.camera.height), (256, 256));
+}
+
+#[test]
+fn a_scene_file_places_a_gltf_overrides_its_materials_and_adds_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf");
+    for f in ["quad.gltf", "quad.bin"] {
+        std::fs::copy(fixture.join(f), d.join(f)).unwrap();
+    }
+    let toml = "[[mesh]]\ngltf = \"quad.gltf\"\ntranslate = [0.0, 1.0, 0.0]\n\n\
+                [materials.floor]\ntype = \"glossy\"\nks = [0.1, 0.1, 0.1]\nns = 20.0\n\n\
+                [[light]]\ntype = \"distant\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]\n";
+    std::fs::write(d.join("s.toml"), toml).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    // The floor's diffuse 0.8 kept, the scene file's type, ks and ns over it.
+    assert_eq!(s.materials, [Material::Glossy { kd: Vec3::splat(0.8), ks: Vec3::splat(0.1), ns: 20.0 }]);
+    assert!(s.mesh.positions.iter().all(|p| p.y == 1.0), "translate moves the glTF's triangles");
+    assert_eq!(s.lights.len(), 2, "the file's distant light and the glTF's point light");
+    assert!(matches!(s.lights[1], LightDesc::Point { intensity, .. } if intensity == Vec3::splat(2.0)));
+    // The glTF's camera stands in for a missing [camera]; moving the mesh is said not to move it.
+    assert!((s.camera.eye - Vec3::new(0.0, 1.0, 3.0)).length() < 1e-5);
+    assert!(s.warnings.iter().any(|w| w.contains("not its camera and lights")), "{:?}", s.warnings);
+    // With a [camera], that one is used.
+    let with_camera = format!(
+        "[camera]\neye = [0.0, 2.0, 2.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 50.0\nwidth = 32\nheight = 24\n\n{toml}"
+    );
+    std::fs::write(d.join("s.toml"), with_camera).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    assert_eq!((s.camera.eye, s.camera.width, s.camera.height), (Vec3::new(0.0, 2.0, 2.0), 32, 24));
+}
+
+#[test]
+fn the_shipped_boxtextured_scene_loads_textured_without_warnings() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let s = Scene::load(root.join("scenes/boxtextured/boxtextured.toml")).unwrap();
+    assert!(s.textured && s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.mesh.len(), 12 + 2);
+    let box_only = Scene::load(root.join("scenes/boxtextured/BoxTextured.gltf"));
+    let e = box_only.expect_err("BoxTextured has no camera").to_string();
+    assert!(e.contains("no perspective camera"), "{e}");
 }

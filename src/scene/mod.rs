@@ -164,9 +164,11 @@ impl Scene {
             .map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
         let resolved = materials::resolve(path, &tri_names, given, &file)?;
         warnings.extend(resolved.warnings);
-        if !resolved.textures.is_empty() && !attributes.has_uvs() {
+        // (A glTF's emissive texture is loaded for its mean only: no map uses it.)
+        let textured = resolved.maps.iter().any(|m| !m.is_empty());
+        if textured && !attributes.has_uvs() {
             warnings.push(
-                "textures are used but no mesh has texture coordinates (vt): each shows one colour".into(),
+                "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),
             );
         }
         let mut lights =
@@ -184,7 +186,7 @@ impl Scene {
             tri_material: resolved.tri_material,
             materials: resolved.materials,
             maps: resolved.maps,
-            textured: !resolved.textures.is_empty(),
+            textured,
             textures: resolved.textures,
             material_names: resolved.names,
             warnings,
