@@ -517,3 +517,39 @@ fn the_shipped_boxtextured_scene_loads_textured_without_warnings() {
     let e = box_only.expect_err("BoxTextured has no camera").to_string();
     assert!(e.contains("no perspective camera"), "{e}");
 }
+
+#[test]
+fn sparse_accessors_and_u8_indices_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    let base: Vec<u8> =
+        [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let base_view = g.view(&base);
+    // Vertex 2 moved from (0,1,0) to (0,2,0) by a sparse value.
+    let idx_view = g.view(&2u16.to_le_bytes());
+    let val: Vec<u8> = [0.0f32, 2.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let val_view = g.view(&val);
+    g.accessors.push(json!({
+        "bufferView": base_view, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [0.0, 0.0, 0.0], "max": [1.0, 2.0, 0.0],
+        "sparse": {"count": 1, "indices": {"bufferView": idx_view, "componentType": 5123},
+                   "values": {"bufferView": val_view}}
+    }));
+    let tri_view = g.view(&[0u8, 1, 2]);
+    g.accessors.push(json!({"bufferView": tri_view, "componentType": 5121, "count": 3, "type": "SCALAR"}));
+    let (cam, cameras) = camera_node(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 40.0);
+    let path = g.write(
+        dir.path(),
+        "sparse",
+        json!({
+            "scenes": [{"nodes": [0, 1]}],
+            "nodes": [{"mesh": 0}, cam],
+            "cameras": cameras,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]
+        }),
+    );
+    let s = Scene::load(path).unwrap();
+    assert_eq!(s.mesh.positions, [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!(s.mesh.indices, [[0, 1, 2]]);
+    assert_eq!(s.material_names, ["(default grey)"]);
+}

@@ -119,7 +119,11 @@ impl Scene {
                         ));
                     }
                     for (name, m, maps) in g.materials {
-                        if !given.mtl.contains_key(&name) {
+                        if given.mtl.contains_key(&name) {
+                            warnings.push(format!(
+                                "mesh[{i}]: material {name} is defined by an earlier mesh file too; that one is used"
+                            ));
+                        } else {
                             given.preset.insert(name.clone(), maps);
                             given.mtl.insert(name, m);
                         }
