@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# Coverage-guided fuzzing of the scene-file, OBJ and MTL loaders with libFuzzer (cargo fuzz):
-# each target loads the Cornell box with one of its files replaced by the fuzzer's bytes and
+# Coverage-guided fuzzing of the scene-file, OBJ, MTL and glTF loaders with libFuzzer (cargo fuzz):
+# each target loads the Cornell box with one of its files replaced by the fuzzer's bytes (gltf: the
+# small glTF of tests/data/gltf/, its JSON or GLB replaced) and
 # fails on a panic, an unsound scene, or an error that is not one line naming a file.
 #
 # Usage: bash scripts/fuzz.sh [SECONDS_PER_TARGET (default 60)] [TARGET...]
-#   targets: scene_toml obj mtl (default: all three)
+#   targets: scene_toml obj mtl gltf (default: all four)
 #
 # Needs a nightly toolchain (rustup) for the sanitizer flags; installs cargo-fuzz from crates.io
-# when it is missing. Seeds: the shipped Cornell file of the target's kind and every regression
+# when it is missing. Seeds: the shipped Cornell file of the target's kind (gltf: tests/data/gltf/quad.gltf) and every regression
 # input of that kind in tests/data/fuzz/. The growing corpus stays in fuzz/corpus/<target>/
 # (not committed). A crash lands in fuzz/artifacts/<target>/: minimise it with
 # `cargo +nightly fuzz tmin <target> <file>` and add it to tests/data/fuzz/ as
@@ -18,7 +19,7 @@ cd "$(dirname "$0")/.."
 secs=${1:-60}
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(scene_toml obj mtl)
+[ ${#targets[@]} -gt 0 ] || targets=(scene_toml obj mtl gltf)
 
 rustup run nightly rustc --version >/dev/null 2>&1 ||
     { echo "fuzz: needs the nightly toolchain (rustup toolchain install nightly)" >&2; exit 1; }
@@ -32,10 +33,11 @@ for t in "${targets[@]}"; do
         scene_toml) ext=toml ;;
         obj) ext=obj ;;
         mtl) ext=mtl ;;
-        *) echo "fuzz: unknown target $t (scene_toml, obj, mtl)" >&2; exit 2 ;;
+        gltf) ext=gltf ;;
+        *) echo "fuzz: unknown target $t (scene_toml, obj, mtl, gltf)" >&2; exit 2 ;;
     esac
     mkdir -p "$seeds/$t" "fuzz/corpus/$t"
-    cp "scenes/cornell/cornell.$ext" "$seeds/$t/"
+    if [ "$t" = gltf ]; then cp tests/data/gltf/quad.gltf "$seeds/$t/"; else cp "scenes/cornell/cornell.$ext" "$seeds/$t/"; fi
     cp tests/data/fuzz/*."$ext" "$seeds/$t/" 2>/dev/null || true
     echo "== fuzz $t for $secs s"
     # -dict-free, one job; -max_len leaves room for whole scene files.

@@ -107,6 +107,26 @@ impl Texture {
         Ok(Texture::from_image(path, image, encoding))
     }
 
+    /// Decodes an image held in memory (a glTF's embedded image); `name` stands for its path
+    /// in messages. The same formats and encodings as [`Texture::load`].
+    pub fn from_memory(name: &Path, bytes: &[u8]) -> Result<Texture, String> {
+        let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("texture {}: {e}", name.display()))?;
+        if reader.format().is_none() {
+            return Err(format!("texture {}: not an image format photonmap reads", name.display()));
+        }
+        let (w, h) = reader.into_dimensions().map_err(|e| format!("texture {}: {e}", name.display()))?;
+        if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+            return Err(format!(
+                "texture {}: {w}x{h} is not a usable size (1 to {MAX_SIDE} texels a side)",
+                name.display()
+            ));
+        }
+        let image = image::load_from_memory(bytes).map_err(|e| format!("texture {}: {e}", name.display()))?;
+        Ok(Texture::from_image(name, image, Encoding::Colour))
+    }
+
     fn from_image(path: &Path, image: image::DynamicImage, encoding: Encoding) -> Texture {
         use image::DynamicImage as D;
         let (width, height) = (image.width(), image.height());

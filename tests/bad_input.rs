@@ -14,6 +14,10 @@ use std::time::{Duration, Instant};
 const TOML: &str = include_str!("../scenes/cornell/cornell.toml");
 const OBJ: &str = include_str!("../scenes/cornell/cornell.obj");
 const MTL: &str = include_str!("../scenes/cornell/cornell.mtl");
+/// A small glTF (a floor quad, a camera, a point light) with its buffer in `quad.bin`, written
+/// beside the Cornell box for the cases that use it.
+const GLTF: &str = include_str!("data/gltf/quad.gltf");
+const GLTF_BIN: &[u8] = include_bytes!("data/gltf/quad.bin");
 
 /// Settings that keep a render that is (wrongly) not refused short; a case may override any.
 const QUICK: &[(&str, &str)] = &[
@@ -169,6 +173,59 @@ fn cases() -> Vec<Case> {
         Case { flags: &[("--spp", "0")], ..case("--spp 0", &["cornell.toml", "spp"]) },
         Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
         Case { output: "missing/out.exr", ..case("output into a missing directory", &["missing"]) },
+        // glTF: each error names the file and the JSON path at fault.
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"uri\": \"quad.bin\"", "\"uri\": \"nosuch.bin\"")],
+            ..case("missing glTF buffer", &["quad.gltf", "buffers[0].uri", "nosuch.bin", "No such file"])
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"scene\": 0,", "\"scene\": 0,,")],
+            ..case("malformed glTF JSON", &["quad.gltf", "malformed glTF JSON", "line 23"])
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"POSITION\": 0,", "\"POSITION\": 7,")],
+            ..case(
+                "glTF accessor index out of range",
+                &["quad.gltf", "meshes[0].primitives[0].attributes[\"POSITION\"]", "index 7 out of range"],
+            )
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"count\": 6,", "\"count\": 60,")],
+            ..case(
+                "glTF accessor past its buffer view",
+                &["quad.gltf", "meshes[0].primitives[0].indices (accessor 3)", "do not fit in bufferView 3"],
+            )
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"translation\": [\n    0,\n    1,\n    3", "\"translation\": [\n    0,\n    1e39,\n    3")],
+            ..case("non-finite glTF transform", &["quad.gltf", "nodes[1].translation", "not finite"])
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[(
+                "quad.gltf",
+                "\"metallicFactor\": 0,",
+                "\"baseColorTexture\": {\"index\": 0}, \"metallicFactor\": 0,",
+            ), ("quad.gltf", "\"accessors\": [", "\"textures\": [{\"source\": 0}], \"images\": [{\"uri\": \"nosuch.png\"}],\n \"accessors\": [")],
+            ..case(
+                "missing glTF image",
+                &["quad.gltf", "materials[0].pbrMetallicRoughness.baseColorTexture", "nosuch.png"],
+            )
+        },
+        Case {
+            scene: "quad.gltf",
+            edits: &[("quad.gltf", "\"camera\": 0,", "")],
+            ..case("glTF without a camera", &["quad.gltf", "no perspective camera"])
+        },
+        Case {
+            edits: &[("cornell.toml", "obj = \"cornell.obj\"", "obj = \"cornell.obj\"\ngltf = \"quad.gltf\"")],
+            ..case("[[mesh]] with obj and gltf", &["cornell.toml", "mesh[0]", "exactly one of `obj` and `gltf`"])
+        },
     ]
 }
 
@@ -184,6 +241,16 @@ fn setup(case: &Case) -> tempfile::TempDir {
             }
         }
         fs::write(dir.path().join(file), text).unwrap();
+    }
+    let uses_gltf = case.scene.ends_with(".gltf") || case.edits.iter().any(|e| e.2.contains("quad.gltf"));
+    if uses_gltf {
+        let mut text = GLTF.to_owned();
+        for &(f, find, replace) in case.edits.iter().filter(|e| e.0 == "quad.gltf") {
+            assert!(text.contains(find), "{}: `{find}` not in {f}", case.name);
+            text = text.replacen(find, replace, 1);
+        }
+        fs::write(dir.path().join("quad.gltf"), text).unwrap();
+        fs::write(dir.path().join("quad.bin"), GLTF_BIN).unwrap();
     }
     dir
 }

@@ -731,3 +731,156 @@ fn regression_inputs_fail_cleanly() {
     assert!(count > 0, "no regression inputs in {}", fuzz_data().display());
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
+
+// ---------------------------------------------------------------------------------------------
+// glTF
+// ---------------------------------------------------------------------------------------------
+
+/// A small glTF (a floor quad with normals, texture coordinates and u16 indices, a camera
+/// and a point light under nodes with TRS) and its buffer.
+const GLTF: &str = include_str!("data/gltf/quad.gltf");
+const GLTF_BIN: &[u8] = include_bytes!("data/gltf/quad.bin");
+
+/// Numbers that stay valid JSON but not valid glTF, or not sane: indices past the end,
+/// counts and offsets that overflow, non-finite after the f32 conversion.
+const NASTY_JSON_NUMBERS: &[&str] = &[
+    "0",
+    "-0",
+    "1",
+    "2",
+    "3",
+    "4",
+    "7",
+    "-1",
+    "12",
+    "48",
+    "139",
+    "141",
+    "255",
+    "65535",
+    "4294967295",
+    "18446744073709551615",
+    "1e39",
+    "-1e39",
+    "1e-45",
+    "0.5",
+    "2.5",
+    "5120",
+    "5121",
+    "5125",
+    "5126",
+    "34962",
+];
+
+/// Byte spans of the JSON numbers in `text`.
+fn number_spans(text: &[u8]) -> Vec<(usize, usize)> {
+    let mut spans = Vec::new();
+    let mut i = 0;
+    while i < text.len() {
+        let starts =
+            text[i].is_ascii_digit() || (text[i] == b'-' && text.get(i + 1).is_some_and(u8::is_ascii_digit));
+        if starts && (i == 0 || !text[i - 1].is_ascii_alphanumeric()) {
+            let s = i;
+            i += 1;
+            while i < text.len() && (text[i].is_ascii_digit() || b".eE+-".contains(&text[i])) {
+                i += 1;
+            }
+            spans.push((s, i));
+        } else {
+            i += 1;
+        }
+    }
+    spans
+}
+
+/// The glTF's numbers replaced (`numbers`), then the generic mutations (`muts`, maybe none).
+fn mutate_gltf(numbers: &[(Index, &'static str)], muts: &[Mutation]) -> Vec<u8> {
+    let mut bytes = GLTF.as_bytes().to_vec();
+    for (i, with) in numbers {
+        let spans = number_spans(&bytes);
+        if spans.is_empty() {
+            break;
+        }
+        let (s, e) = spans[i.index(spans.len())];
+        bytes.splice(s..e, with.bytes());
+    }
+    if muts.is_empty() {
+        bytes
+    } else {
+        apply(&String::from_utf8_lossy(&bytes), muts)
+    }
+}
+
+/// A GLB of the fixture: its JSON and buffer as the two chunks.
+fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
+    let pad = |mut v: Vec<u8>, with: u8| {
+        while v.len() % 4 != 0 {
+            v.push(with);
+        }
+        v
+    };
+    // The buffer without a uri is the GLB's binary chunk.
+    let json = String::from_utf8_lossy(json).replacen("\"uri\": \"quad.bin\",", "", 1).into_bytes();
+    let (json, bin) = (pad(json, b' '), pad(bin.to_vec(), 0));
+    let mut out = b"glTF".to_vec();
+    out.extend(2u32.to_le_bytes());
+    out.extend(((12 + 8 + json.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend((json.len() as u32).to_le_bytes());
+    out.extend(b"JSON");
+    out.extend(&json);
+    out.extend((bin.len() as u32).to_le_bytes());
+    out.extend(b"BIN\0");
+    out.extend(&bin);
+    out
+}
+
+#[test]
+fn the_unmutated_gltf_loads_as_gltf_and_glb() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("quad.gltf"), GLTF).unwrap();
+    fs::write(dir.path().join("quad.bin"), GLTF_BIN).unwrap();
+    fs::write(dir.path().join("quad.glb"), glb(GLTF.as_bytes(), GLTF_BIN)).unwrap();
+    for name in ["quad.gltf", "quad.glb"] {
+        let s = Scene::load(dir.path().join(name)).unwrap_or_else(|e| panic!("{name}: {e}"));
+        check_scene(&s).unwrap();
+        assert_eq!((s.mesh.len(), s.lights.len()), (2, 1), "{name}");
+        assert!(s.warnings.is_empty(), "{name}: {:?}", s.warnings);
+    }
+}
+
+#[test]
+fn fuzz_gltf() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("quad.bin"), GLTF_BIN).unwrap();
+    let files = &["quad.gltf", "quad.bin"];
+    let numbers = prop::collection::vec((any::<Index>(), prop::sample::select(NASTY_JSON_NUMBERS)), 0..4);
+    let generic = prop_oneof![1 => Just(Vec::new()), 1 => mutations()];
+    proptest!(config(), |(numbers in numbers, muts in generic)| {
+        let bytes = mutate_gltf(&numbers, &muts);
+        let path = dir.path().join("quad.gltf");
+        fs::write(&path, &bytes).unwrap();
+        let r = outcome(|| Scene::load(&path), &[], files);
+        prop_assert!(r.is_ok(), "{}\n--- numbers {:?} mutations {:?}\n--- glTF:\n{}", r.unwrap_err(), numbers, muts, show(&bytes));
+    });
+}
+
+#[test]
+fn fuzz_glb_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = glb(GLTF.as_bytes(), GLTF_BIN);
+    let edits = prop::collection::vec((any::<Index>(), any::<u8>()), 1..6);
+    proptest!(config(), |(edits in edits, cut in prop::option::of(any::<Index>()))| {
+        let mut bytes = base.clone();
+        for (i, b) in &edits {
+            let at = i.index(bytes.len());
+            bytes[at] = *b;
+        }
+        if let Some(c) = cut {
+            bytes.truncate(c.index(bytes.len() + 1));
+        }
+        let path = dir.path().join("quad.glb");
+        fs::write(&path, &bytes).unwrap();
+        let r = outcome(|| Scene::load(&path), &[], &["quad.glb"]);
+        prop_assert!(r.is_ok(), "{}\n--- edits {:?} cut {:?}", r.unwrap_err(), edits, cut);
+    });
+}

@@ -11,6 +11,7 @@ const TOML: &str = include_str!("../../scenes/cornell/cornell.toml");
 const OBJ: &str = include_str!("../../scenes/cornell/cornell.obj");
 const MTL: &str = include_str!("../../scenes/cornell/cornell.mtl");
 const FILES: [&str; 3] = ["cornell.toml", "cornell.obj", "cornell.mtl"];
+const GLTF_BIN: &[u8] = include_bytes!("../../tests/data/gltf/quad.bin");
 
 /// A private directory per process holding the Cornell box (the fuzzer overwrites one file of
 /// it each run, the others stay as shipped).
@@ -32,6 +33,20 @@ pub fn check(which: usize, bytes: &[u8]) {
         std::fs::write(d.join(name), content).expect("write a fuzz input");
     }
     match Scene::load(d.join(FILES[0])) {
+        Ok(scene) => sound(&scene),
+        Err(e) => one_line_naming_a_file(&e),
+    }
+}
+
+/// Loads the small glTF of `tests/data/gltf/` with its JSON (or GLB) replaced by `bytes`
+/// (its buffer `quad.bin` beside it, as shipped) and panics if the loader breaks the rule.
+pub fn check_gltf(bytes: &[u8]) {
+    let d = dir();
+    std::fs::write(d.join("quad.bin"), GLTF_BIN).expect("write the glTF buffer");
+    let ext = if bytes.starts_with(b"glTF") { "glb" } else { "gltf" };
+    let path = d.join(format!("quad.{ext}"));
+    std::fs::write(&path, bytes).expect("write a fuzz input");
+    match Scene::load(&path) {
         Ok(scene) => sound(&scene),
         Err(e) => one_line_naming_a_file(&e),
     }

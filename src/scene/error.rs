@@ -18,6 +18,10 @@ pub enum SceneError {
     /// A malformed OBJ or MTL line.
     #[error("{}:{line}: {}", one_line(path.display()), one_line(message))]
     Line { path: PathBuf, line: usize, message: String },
+    /// A glTF value that is malformed or cannot be drawn, at its JSON path
+    /// (`meshes[0].primitives[1].attributes["POSITION"]`).
+    #[error("{}: {}: {}", one_line(path.display()), one_line(at), one_line(message))]
+    Json { path: PathBuf, at: String, message: String },
     /// A problem in a whole file, with no single line to blame.
     #[error("{}: {}", one_line(path.display()), one_line(message))]
     File { path: PathBuf, message: String },
@@ -49,6 +53,7 @@ impl SceneError {
             | SceneError::Toml { path, .. }
             | SceneError::Field { path, .. }
             | SceneError::Line { path, .. }
+            | SceneError::Json { path, .. }
             | SceneError::File { path, .. } => path,
         }
     }

@@ -13,7 +13,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
-    pub camera: CameraEntries,
+    /// Optional when a glTF mesh brings a camera.
+    pub camera: Option<CameraEntries>,
     #[serde(default, rename = "mesh")]
     pub meshes: Vec<MeshEntry>,
     #[serde(default)]
@@ -114,12 +115,14 @@ pub enum Scale {
     PerAxis([f32; 3]),
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct MeshEntry {
-    /// Path of the OBJ file, relative to the scene file.
-    pub obj: PathBuf,
-    /// Material for every face of this mesh, replacing the OBJ's `usemtl`.
+    /// Path of the OBJ file, relative to the scene file (exactly one of `obj` and `gltf`).
+    pub obj: Option<PathBuf>,
+    /// Path of a glTF 2.0 file (`.gltf` or `.glb`), relative to the scene file.
+    pub gltf: Option<PathBuf>,
+    /// Material for every face of this mesh, replacing the file's own.
     pub material: Option<String>,
     /// Applied to the vertices first, then `rotate`, then `translate`.
     pub scale: Option<Scale>,

@@ -24,19 +24,29 @@ pub struct Resolved {
     pub warnings: Vec<String>,
 }
 
-/// Resolves every triangle's material name to an index, merging MTL materials with the scene
-/// file's `[materials.NAME]` entries (the file wins, field by field).
+/// The materials the geometry files define, by name: MTL materials, and glTF materials read
+/// as the MTL material they map to, with the texture maps already loaded (`preset`, into
+/// `textures`) that glTF gives them.
+#[derive(Default)]
+pub struct Given {
+    pub mtl: HashMap<String, MtlMaterial>,
+    pub preset: HashMap<String, MaterialMaps>,
+    pub textures: Textures,
+}
+
+/// Resolves every triangle's material name to an index, merging the geometry files' materials
+/// with the scene file's `[materials.NAME]` entries (the file wins, field by field).
 pub fn resolve(
     path: &Path,
     tri_names: &[Option<String>],
-    mtl: &HashMap<String, MtlMaterial>,
+    given: Given,
     file: &SceneFile,
 ) -> Result<Resolved, SceneError> {
+    let Given { mtl, preset, mut textures } = given;
     let mut index: HashMap<Option<&str>, u32> = HashMap::new();
     let mut materials = Vec::new();
     let mut maps = Vec::new();
     let mut names = Vec::new();
-    let mut textures = Textures::default();
     let mut warnings = Vec::new();
     let mut tri_material = Vec::with_capacity(tri_names.len());
     for name in tri_names {
@@ -49,7 +59,9 @@ pub fn resolve(
                     Some(n) => {
                         let (m, e) = (mtl.get(n), file.materials.get(n));
                         let material = material(path, n, m, e)?;
-                        let textured = texture_maps(path, n, &material, m, e, &mut textures, &mut warnings)?;
+                        let preset = preset.get(n).copied().unwrap_or_default();
+                        let textured =
+                            texture_maps(path, n, &material, preset, m, e, &mut textures, &mut warnings)?;
                         (material, textured)
                     }
                 };
@@ -139,20 +151,27 @@ fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
 }
 
 /// One texture as a material uses it: the image, the transform of the texture coordinates
-/// (`uv * scale + offset`, MTL's `-s` and `-o`) and what happens outside `[0, 1)`.
+/// (`uv * scale + offset`, MTL's `-s` and `-o`), what happens outside `[0, 1)` and a colour
+/// the texels are multiplied by (glTF's `baseColorFactor`; 1 for MTL maps).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TextureRef {
     pub texture: u32,
     pub scale: Vec2,
     pub offset: Vec2,
     pub wrap: Wrap,
+    pub factor: Vec3,
 }
 
 impl TextureRef {
+    /// The whole of texture `texture`, repeated, unscaled.
+    pub fn plain(texture: u32) -> TextureRef {
+        TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap: Wrap::Repeat, factor: Vec3::ONE }
+    }
+
     /// Linear RGB at `uv`.
     #[inline]
     pub fn rgb(&self, textures: &Textures, uv: Vec2) -> Vec3 {
-        textures.get(self.texture).sample(uv * self.scale + self.offset, self.wrap).truncate()
+        textures.get(self.texture).sample(uv * self.scale + self.offset, self.wrap).truncate() * self.factor
     }
 }
 
@@ -198,18 +217,20 @@ impl MaterialMaps {
 }
 
 /// The texture maps of material `name`: the scene file's `kd_texture`/`ks_texture` (relative
-/// to the scene file) over the MTL's `map_Kd`/`map_Ks`. Maps the material cannot use, and
-/// the MTL maps not rendered yet, are named in `warnings`.
+/// to the scene file) over the MTL's `map_Kd`/`map_Ks` over the glTF's (`preset`). Maps the
+/// material cannot use, and the MTL maps not rendered yet, are named in `warnings`.
+#[allow(clippy::too_many_arguments)] // one material's three sources, and where the results go
 fn texture_maps(
     path: &Path,
     name: &str,
     m: &Material,
+    preset: MaterialMaps,
     mtl: Option<&MtlMaterial>,
     entry: Option<&MaterialEntry>,
     textures: &mut Textures,
     warnings: &mut Vec<String>,
 ) -> Result<MaterialMaps, SceneError> {
-    let mut maps = MaterialMaps::default();
+    let mut maps = preset;
     let from_mtl = |map: &MtlMap,
                     textures: &mut Textures,
                     warnings: &mut Vec<String>,
@@ -228,7 +249,7 @@ fn texture_maps(
             ));
         }
         let wrap = if map.clamp { Wrap::Clamp } else { Wrap::Repeat };
-        Ok(TextureRef { texture, scale: map.scale, offset: map.offset, wrap })
+        Ok(TextureRef { texture, scale: map.scale, offset: map.offset, wrap, factor: Vec3::ONE })
     };
     for map in mtl.map_or(&[][..], |m| &m.maps[..]) {
         match map.keyword.as_str() {
@@ -258,7 +279,7 @@ fn texture_maps(
         let texture = textures
             .get_or_load(&relative_to(path, file))
             .map_err(|e| SceneError::field(path, format!("materials.{name}.{field}"), e))?;
-        Ok(TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap: Wrap::Repeat })
+        Ok(TextureRef::plain(texture))
     };
     if let Some(e) = entry {
         if let Some(f) = &e.kd_texture {

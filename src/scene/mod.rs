@@ -1,5 +1,5 @@
 //! Scenes: a TOML file (camera, meshes, material overrides, lights, render settings) with
-//! geometry and materials from Wavefront OBJ/MTL. Conventions are those of `scenes/SCENES.md`: metres,
+//! geometry and materials from Wavefront OBJ/MTL or glTF 2.0, or a glTF file alone. Conventions are those of `scenes/SCENES.md`: metres,
 //! right-handed +Y up, counter-clockwise front faces, flat shading.
 //!
 //! Loading validates everything up front and reports the file and the line or field at fault.
@@ -8,10 +8,12 @@ mod camera;
 mod cameras;
 mod error;
 mod file;
+mod gltf;
 mod materials;
 mod obj;
 mod transform;
 
+pub use self::gltf::phong_exponent;
 pub use camera::{Camera, CameraKey, Lens, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
 pub use file::{
@@ -60,9 +62,14 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Loads the scene file at `path` and everything it references.
+    /// Loads the scene file at `path` and everything it references. A `.gltf` or `.glb` file
+    /// is a scene by itself: its camera, lights and materials, the settings' defaults.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
+        let ext = path.extension().map(|e| e.to_string_lossy().to_lowercase());
+        if matches!(ext.as_deref(), Some("gltf" | "glb")) {
+            return Scene::from_gltf(path);
+        }
         let text =
             std::fs::read_to_string(path).map_err(|error| SceneError::Io { path: path.to_owned(), error })?;
         Scene::from_str(path, &text)
@@ -70,58 +77,107 @@ impl Scene {
 
     /// Builds a scene from TOML `text`; paths inside are relative to `path`'s directory.
     pub fn from_str(path: &Path, text: &str) -> Result<Scene, SceneError> {
-        let file = SceneFile::parse(path, text)?;
-        let cameras = cameras::cameras(path, &file.camera)?;
-        let camera = cameras[0].view(cameras[0].frames().map_or(0, |f| *f.start()));
+        Scene::from_file(path, SceneFile::parse(path, text)?)
+    }
+
+    /// The scene of the glTF (or GLB) file at `path` alone, as if a scene file held just
+    /// `[[mesh]] gltf = "<path>"`.
+    pub fn from_gltf(path: &Path) -> Result<Scene, SceneError> {
+        let name = path.file_name().map(PathBuf::from).unwrap_or_else(|| path.to_owned());
+        let file = SceneFile {
+            camera: None,
+            meshes: vec![file::MeshEntry { gltf: Some(name), ..Default::default() }],
+            materials: Default::default(),
+            lights: Vec::new(),
+            portals: Vec::new(),
+            render: RenderSettings::default(),
+        };
+        Scene::from_file(path, file)
+    }
+
+    /// Builds the scene `file` describes; paths inside are relative to `path`'s directory.
+    pub fn from_file(path: &Path, file: SceneFile) -> Result<Scene, SceneError> {
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
         }
         let mut mesh = TriangleMesh::default();
         let mut attributes = VertexAttributes::default();
         let mut tri_names: Vec<Option<String>> = Vec::new();
-        let mut mtl: HashMap<String, MtlMaterial> = HashMap::new();
+        let mut given = materials::Given::default();
+        let mut warnings = Vec::new();
+        let mut gltf_lights = Vec::new();
+        let mut gltf_camera = None;
         for (i, entry) in file.meshes.iter().enumerate() {
-            let obj_path = obj::relative_to(path, &entry.obj);
-            let mut data = obj::load_obj(&obj_path)?;
-            transform::apply(path, i, entry, &mut data.mesh, &mut data.attributes)?;
-            if let Some(m) = &entry.material {
-                tri_names.extend(std::iter::repeat_n(Some(m.clone()), data.mesh.len()));
-            } else {
-                tri_names.extend(data.tri_material);
-            }
-            for (name, line) in &data.used {
-                if entry.material.is_none()
-                    && !file.materials.contains_key(name)
-                    && !data.materials.iter().any(|(n, _)| n == name)
-                {
-                    return Err(SceneError::Line {
-                        path: obj_path.clone(),
-                        line: *line,
-                        message: format!(
-                            "usemtl {name}: defined neither in the MTL nor in the scene file's [materials]"
-                        ),
-                    });
+            let (mut part, mut part_attributes, names) = match (&entry.obj, &entry.gltf) {
+                (Some(obj), None) => load_obj_entry(path, obj, entry, &file, &mut given.mtl)?,
+                (None, Some(g)) => {
+                    let g = self::gltf::load(&obj::relative_to(path, g), &mut given.textures)?;
+                    let moved = entry.scale.is_some() || entry.translate.is_some();
+                    if moved && (g.camera.is_some() || !g.lights.is_empty()) {
+                        warnings.push(format!(
+                            "mesh[{i}]: scale and translate move the glTF's triangles, not its camera and lights"
+                        ));
+                    }
+                    for (name, m, maps) in g.materials {
+                        if given.mtl.contains_key(&name) {
+                            warnings.push(format!(
+                                "mesh[{i}]: material {name} is defined by an earlier mesh file too; that one is used"
+                            ));
+                        } else {
+                            given.preset.insert(name.clone(), maps);
+                            given.mtl.insert(name, m);
+                        }
+                    }
+                    warnings.extend(g.warnings);
+                    gltf_lights.extend(g.lights);
+                    gltf_camera = gltf_camera.or(g.camera);
+                    (g.mesh, g.attributes, g.tri_material)
                 }
+                _ => {
+                    return Err(SceneError::field(
+                        path,
+                        format!("mesh[{i}]"),
+                        "give exactly one of `obj` and `gltf`",
+                    ))
+                }
+            };
+            transform::apply(path, i, entry, &mut part, &mut part_attributes)?;
+            if let Some(m) = &entry.material {
+                tri_names.extend(std::iter::repeat_n(Some(m.clone()), part.len()));
+            } else {
+                tri_names.extend(names);
             }
-            for (name, m) in data.materials {
-                mtl.entry(name).or_insert(m);
-            }
-            attributes.append(mesh.positions.len(), &data.attributes, data.mesh.positions.len());
-            mesh.append(&data.mesh);
+            attributes.append(mesh.positions.len(), &part_attributes, part.positions.len());
+            mesh.append(&part);
         }
+        let cameras = match (&file.camera, gltf_camera) {
+            (Some(c), _) => cameras::cameras(path, c)?,
+            (None, Some(view)) => vec![SceneCamera::still("camera", view)],
+            (None, None) => {
+                return Err(SceneError::field(
+                    path,
+                    "camera",
+                    "missing: no [camera] in the scene file and no perspective camera in its glTF files",
+                ))
+            }
+        };
+        let camera = cameras[0].view(cameras[0].frames().map_or(0, |f| *f.start()));
         mesh.validate().map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
         attributes
             .validate(mesh.positions.len())
             .map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
-        let resolved = materials::resolve(path, &tri_names, &mtl, &file)?;
-        let mut warnings = resolved.warnings;
-        if !resolved.textures.is_empty() && !attributes.has_uvs() {
+        let resolved = materials::resolve(path, &tri_names, given, &file)?;
+        warnings.extend(resolved.warnings);
+        // (A glTF's emissive texture is loaded for its mean only: no map uses it.)
+        let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some());
+        if textured && !attributes.has_uvs() {
             warnings.push(
-                "textures are used but no mesh has texture coordinates (vt): each shows one colour".into(),
+                "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),
             );
         }
-        let lights =
+        let mut lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
+        lights.extend(gltf_lights);
         let portals =
             file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
         validate_render(path, &file.render, &cameras)?;
@@ -134,7 +190,7 @@ impl Scene {
             tri_material: resolved.tri_material,
             materials: resolved.materials,
             maps: resolved.maps,
-            textured: !resolved.textures.is_empty(),
+            textured,
             textures: resolved.textures,
             material_names: resolved.names,
             warnings,
@@ -215,6 +271,37 @@ impl Scene {
         }
         count
     }
+}
+
+/// An OBJ `[[mesh]]` entry's triangles, their attributes and material names; its MTL
+/// materials go into `mtl` (the first of each name wins).
+fn load_obj_entry(
+    path: &Path,
+    obj: &Path,
+    entry: &file::MeshEntry,
+    file: &SceneFile,
+    mtl: &mut HashMap<String, MtlMaterial>,
+) -> Result<(TriangleMesh, VertexAttributes, Vec<Option<String>>), SceneError> {
+    let obj_path = obj::relative_to(path, obj);
+    let data = obj::load_obj(&obj_path)?;
+    for (name, line) in &data.used {
+        if entry.material.is_none()
+            && !file.materials.contains_key(name)
+            && !data.materials.iter().any(|(n, _)| n == name)
+        {
+            return Err(SceneError::Line {
+                path: obj_path.clone(),
+                line: *line,
+                message: format!(
+                    "usemtl {name}: defined neither in the MTL nor in the scene file's [materials]"
+                ),
+            });
+        }
+    }
+    for (name, m) in data.materials {
+        mtl.entry(name).or_insert(m);
+    }
+    Ok((data.mesh, data.attributes, data.tri_material))
 }
 
 fn light(path: &Path, i: usize, l: &LightEntry) -> Result<LightDesc, SceneError> {

@@ -1,0 +1,261 @@
+//! glTF's metallic-roughness materials (glTF 2.0 §3.9, with `KHR_materials_transmission`,
+//! `KHR_materials_ior` and `KHR_materials_emissive_strength`) read as the MTL material they
+//! map to, so that the scene file's `[materials.NAME]` overrides them field by field as it
+//! does MTL materials. The mapping (README, "glTF 2.0"):
+//!
+//! | glTF | photonmap |
+//! |---|---|
+//! | emissive × strength ≠ 0 | `emissive`, `kd` = base colour, `ke` = emissive (× the mean of `emissiveTexture`) |
+//! | transmission > 0.5 | `glass`, `ior` (default 1.5) |
+//! | metallic ≥ 0.5, roughness 0 | `mirror`, `ks` = base colour |
+//! | metallic ≥ 0.5 | `glossy`, `kd` = 0, `ks` = base colour, `ns` = 2/α² − 2, α = roughness² |
+//! | metallic < 0.5, roughness < 0.5 | `glossy`, `kd` = 0.96 base colour, `ks` = 0.04, same `ns` |
+//! | metallic < 0.5, roughness ≥ 0.5 | `diffuse`, `kd` = base colour |
+//!
+//! `ns` is clamped to [0, 10⁴]. The base colour is `baseColorFactor × baseColorTexture` (the
+//! factor rides on the texture reference). Textures not rendered are named in the warnings.
+
+use super::super::materials::{MaterialMaps, TextureRef};
+use super::super::obj::MtlMaterial;
+use super::super::SceneError;
+use super::data::{at, uri_bytes, Buffers};
+use super::Warnings;
+use crate::texture::{Texture, Textures, Wrap};
+use glam::{Vec2, Vec3};
+use gltf::texture::WrappingMode;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// The highest Phong exponent a glTF roughness maps to.
+pub const MAX_NS: f32 = 1e4;
+
+/// The Phong exponent of glTF roughness `r`: `2/α² − 2` with `α = r²` (Walter et al. 2007's
+/// Beckmann–Phong correspondence, with Disney's / glTF's `α = roughness²`), in [0, 10⁴].
+pub fn phong_exponent(r: f32) -> f32 {
+    let alpha = r.clamp(0.0, 1.0).powi(2);
+    if alpha <= 0.0 {
+        return MAX_NS;
+    }
+    (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_NS)
+}
+
+/// Images already turned into textures, by glTF image index.
+pub struct Images<'a> {
+    pub path: &'a Path,
+    pub buffers: &'a Buffers,
+    pub textures: &'a mut Textures,
+    pub loaded: HashMap<usize, u32>,
+}
+
+impl Images<'_> {
+    /// The texture of image `image`, loaded once: a file through [`Textures::get_or_load`],
+    /// a buffer view or `data:` URI decoded from memory.
+    fn texture(&mut self, field: &str, image: gltf::Image) -> Result<u32, SceneError> {
+        if let Some(&t) = self.loaded.get(&image.index()) {
+            return Ok(t);
+        }
+        let path = self.path;
+        let name = format!("{}#images[{}]", path.display(), image.index());
+        let t = match image.source() {
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                let file = super::super::obj::relative_to(path, Path::new(&super::data::percent_decode(uri)));
+                self.textures.get_or_load(&file).map_err(|e| at(path, field, e))?
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let bytes = uri_bytes(path, &format!("images[{}].uri", image.index()), uri)?;
+                let t = Texture::from_memory(Path::new(&name), &bytes).map_err(|e| at(path, field, e))?;
+                self.textures.push(t)
+            }
+            gltf::image::Source::View { view, .. } => {
+                let buffer = &self.buffers.0[view.buffer().index()];
+                let bytes = view
+                    .offset()
+                    .checked_add(view.length())
+                    .and_then(|end| buffer.get(view.offset()..end))
+                    .ok_or_else(|| {
+                        at(
+                            path,
+                            format!("images[{}].bufferView", image.index()),
+                            format!("bufferView {} runs past the end of its buffer", view.index()),
+                        )
+                    })?;
+                let t = Texture::from_memory(Path::new(&name), bytes).map_err(|e| at(path, field, e))?;
+                self.textures.push(t)
+            }
+        };
+        self.loaded.insert(image.index(), t);
+        Ok(t)
+    }
+
+    /// A texture reference for `info` (at `field`), multiplied by `factor`.
+    fn reference(
+        &mut self,
+        field: &str,
+        info: &gltf::texture::Info,
+        factor: Vec3,
+        warnings: &mut Warnings,
+    ) -> Result<TextureRef, SceneError> {
+        let tex = info.texture();
+        if info.tex_coord() != 0 {
+            warnings.say(
+                format!("texcoord{}", info.tex_coord()),
+                format!("{field}: TEXCOORD_{} is not read; TEXCOORD_0 is used", info.tex_coord()),
+            );
+        }
+        let sampler = tex.sampler();
+        let (s, t) = (sampler.wrap_s(), sampler.wrap_t());
+        let wrap = match (s, t) {
+            (WrappingMode::ClampToEdge, WrappingMode::ClampToEdge) => Wrap::Clamp,
+            (WrappingMode::Repeat, WrappingMode::Repeat) => Wrap::Repeat,
+            _ => {
+                warnings.say(
+                    "wrap",
+                    format!("{field}: sampler wrap modes {s:?}/{t:?} are drawn as Repeat (only Repeat and ClampToEdge on both axes are)"),
+                );
+                Wrap::Repeat
+            }
+        };
+        let texture = self.texture(field, tex.source())?;
+        Ok(TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap, factor })
+    }
+}
+
+/// glTF material `m` (its JSON path `field`, its name `name` in messages) as an MTL material
+/// and its texture maps.
+pub fn material(
+    field: &str,
+    name: &str,
+    m: &gltf::Material,
+    images: &mut Images,
+    warnings: &mut Warnings,
+) -> Result<(MtlMaterial, MaterialMaps), SceneError> {
+    let path = images.path;
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, alpha] = pbr.base_color_factor();
+    let base = Vec3::new(r, g, b);
+    let (metal, rough) = (pbr.metallic_factor(), pbr.roughness_factor());
+    let finite = base.is_finite() && alpha.is_finite() && metal.is_finite() && rough.is_finite();
+    if !finite {
+        return Err(at(path, format!("{field}.pbrMetallicRoughness"), "a factor is not finite"));
+    }
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    let mut ke = Vec3::from(m.emissive_factor()) * strength;
+    if !ke.is_finite() || ke.min_element() < 0.0 {
+        return Err(at(
+            path,
+            format!("{field}.emissiveFactor"),
+            format!("{ke} (× strength) is not finite and non-negative"),
+        ));
+    }
+    let base_map = match pbr.base_color_texture() {
+        Some(info) => Some(images.reference(
+            &format!("{field}.pbrMetallicRoughness.baseColorTexture"),
+            &info,
+            base,
+            warnings,
+        )?),
+        None => None,
+    };
+    if let Some(info) = m.emissive_texture() {
+        let f = format!("{field}.emissiveTexture");
+        let t = images.reference(&f, &info, Vec3::ONE, warnings)?;
+        ke *= images.textures.get(t.texture).mean();
+        warnings.say(
+            format!("emissive-texture {name}"),
+            format!("{f} (material {name}): emissive texture averaged (per-texel emission is not implemented yet)"),
+        );
+    }
+    if pbr.metallic_roughness_texture().is_some() {
+        warnings.say(
+            format!("mr {name}"),
+            format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not rendered; the factors are used"),
+        );
+    }
+    for (what, present) in [
+        ("normalTexture", m.normal_texture().is_some()),
+        ("occlusionTexture", m.occlusion_texture().is_some()),
+    ] {
+        if present {
+            warnings
+                .say(format!("{what} {name}"), format!("{field}.{what} (material {name}) is not rendered"));
+        }
+    }
+    match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => {}
+        mode => warnings.say(
+            format!("alpha {name}"),
+            format!("{field}.alphaMode {mode:?} (material {name}): cut-outs and blending are not implemented yet; drawn opaque"),
+        ),
+    }
+    let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
+    if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
+        warnings.say(
+            format!("tt {name}"),
+            format!("{field}: transmissionTexture (material {name}) is not rendered"),
+        );
+    }
+    let mut mtl = MtlMaterial::default();
+    let mut maps = MaterialMaps::default();
+    let unit = |v: Vec3| v.clamp(Vec3::ZERO, Vec3::ONE).to_array();
+    if ke.max_element() > 0.0 {
+        mtl.ke = Some(ke.to_array());
+        mtl.kd = Some(unit(base));
+        mtl.illum = Some(1);
+        maps.kd = base_map;
+        if metal >= 0.5 || transmission > 0.5 {
+            warnings.say(
+                format!("emissive-kind {name}"),
+                format!("material {name}: emissive, so drawn as an emissive diffuse surface (its metal or transmission is not)"),
+            );
+        }
+    } else if transmission > 0.5 {
+        mtl.illum = Some(7);
+        mtl.ni = Some(m.ior().unwrap_or(1.5));
+        if base.cmpne(Vec3::ONE).any() || base_map.is_some() {
+            warnings.say(
+                format!("tint {name}"),
+                format!("material {name}: glass is clear; its base colour does not tint it"),
+            );
+        }
+    } else if metal >= 0.5 {
+        mtl.ks = Some(unit(base));
+        maps.ks = base_map;
+        if rough <= 0.0 {
+            mtl.illum = Some(3);
+        } else {
+            mtl.illum = Some(2);
+            mtl.kd = Some([0.0; 3]);
+            mtl.ns = Some(phong_exponent(rough));
+        }
+    } else if rough < 0.5 {
+        mtl.illum = Some(2);
+        mtl.kd = Some(unit(base * 0.96));
+        mtl.ks = Some([0.04; 3]);
+        mtl.ns = Some(phong_exponent(rough));
+        maps.kd = base_map.map(|t| TextureRef { factor: t.factor * 0.96, ..t });
+    } else {
+        mtl.illum = Some(1);
+        mtl.kd = Some(unit(base));
+        maps.kd = base_map;
+    }
+    if base.max_element() > 1.0 || base.min_element() < 0.0 {
+        warnings.say(
+            format!("clamp {name}"),
+            format!("material {name}: baseColorFactor {base} clamped to [0, 1]"),
+        );
+    }
+    Ok((mtl, maps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn roughness_to_phong() {
+        assert_eq!(phong_exponent(1.0), 0.0);
+        assert_eq!(phong_exponent(0.0), MAX_NS);
+        assert!((phong_exponent(0.5) - 30.0).abs() < 1e-4);
+        assert!(phong_exponent(0.3) > phong_exponent(0.4));
+    }
+}

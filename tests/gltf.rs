@@ -1,0 +1,555 @@
+//! glTF 2.0 input: the analytic and differential checks of the real-scenes issue.
+//!
+//! - The furnace as a glTF cube (emissive 1, base colour 0.5) renders exactly 2.0.
+//! - The Cornell box rebuilt as glTF (one primitive per material, the camera on a node, the
+//!   light's radiance through `KHR_materials_emissive_strength`) renders as the OBJ one does.
+//! - Node transforms: a child's TRS under a parent's matrix places a triangle, a light and a
+//!   camera where the composition says; a mirroring one keeps the front face.
+//! - A constant PNG base-colour texture (file, buffer view or data URI) renders as its
+//!   constant bit for bit, the base colour factor multiplying it.
+
+#[allow(dead_code)]
+mod common;
+
+use common::render_checked;
+use glam::{Mat4, Quat, Vec3};
+use photonmap::config::{IntegratorKind, RenderSettings};
+use photonmap::film::Film;
+use photonmap::light::LightDesc;
+use photonmap::material::Material;
+use photonmap::scene::Scene;
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// Builds a glTF: binary data in one buffer (written as `<name>.bin`, or inline as a data URI),
+/// accessors over it, and whatever JSON the test adds.
+#[derive(Default)]
+struct Gltf {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+}
+
+impl Gltf {
+    fn view(&mut self, bytes: &[u8]) -> usize {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        self.views.push(json!({"buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len()}));
+        self.bin.extend_from_slice(bytes);
+        self.views.len() - 1
+    }
+
+    /// An accessor of float vectors (`ty` VEC2/VEC3).
+    fn floats(&mut self, data: &[f32], n: usize, ty: &str) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors
+            .push(json!({"bufferView": view, "componentType": 5126, "count": data.len() / n, "type": ty}));
+        self.accessors.len() - 1
+    }
+
+    fn indices(&mut self, data: &[u32]) -> usize {
+        let bytes: Vec<u8> = data.iter().flat_map(|&x| (x as u16).to_le_bytes()).collect();
+        let view = self.view(&bytes);
+        self.accessors
+            .push(json!({"bufferView": view, "componentType": 5123, "count": data.len(), "type": "SCALAR"}));
+        self.accessors.len() - 1
+    }
+
+    /// A primitive's JSON: positions, optional uvs, indices, material.
+    fn primitive(
+        &mut self,
+        positions: &[Vec3],
+        uvs: Option<&[[f32; 2]]>,
+        tris: &[[u32; 3]],
+        material: usize,
+    ) -> Value {
+        let p: Vec<f32> = positions.iter().flat_map(|v| v.to_array()).collect();
+        let position = self.floats(&p, 3, "VEC3");
+        // glTF requires the bounds of POSITION.
+        let lo = positions.iter().fold(Vec3::INFINITY, |a, &b| a.min(b));
+        let hi = positions.iter().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+        self.accessors[position]["min"] = json!(lo.to_array());
+        self.accessors[position]["max"] = json!(hi.to_array());
+        let mut attributes = json!({"POSITION": position});
+        if let Some(uv) = uvs {
+            let t: Vec<f32> = uv.iter().flatten().copied().collect();
+            attributes["TEXCOORD_0"] = json!(self.floats(&t, 2, "VEC2"));
+        }
+        let i: Vec<u32> = tris.iter().flatten().copied().collect();
+        json!({"attributes": attributes, "indices": self.indices(&i), "material": material})
+    }
+
+    /// Writes `dir/<name>.gltf` (and `<name>.bin`) with `extra`'s top-level members.
+    fn write(self, dir: &Path, name: &str, extra: Value) -> std::path::PathBuf {
+        std::fs::write(dir.join(format!("{name}.bin")), &self.bin).unwrap();
+        let mut root = json!({
+            "asset": {"version": "2.0"},
+            "buffers": [{"uri": format!("{name}.bin"), "byteLength": self.bin.len()}],
+            "bufferViews": self.views,
+            "accessors": self.accessors,
+        });
+        for (k, v) in extra.as_object().unwrap() {
+            root[k] = v.clone();
+        }
+        let path = dir.join(format!("{name}.gltf"));
+        std::fs::write(&path, serde_json::to_string_pretty(&root).unwrap()).unwrap();
+        path
+    }
+}
+
+/// The cube `[-1, 1]^3`, faces wound inward, each face's corners at uv (0,0) (1,0) (1,1) (0,1).
+fn cube() -> (Vec<Vec3>, Vec<[f32; 2]>, Vec<[u32; 3]>) {
+    let (mut p, mut uv, mut t) = (Vec::new(), Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
+            let corner = |x: f32, y: f32| {
+                let mut c = Vec3::ZERO;
+                c[axis] = side;
+                c[a] = x;
+                c[b] = y;
+                c
+            };
+            let quad = if side > 0.0 {
+                [corner(-1.0, -1.0), corner(-1.0, 1.0), corner(1.0, 1.0), corner(1.0, -1.0)]
+            } else {
+                [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)]
+            };
+            let v = p.len() as u32;
+            p.extend(quad);
+            uv.extend([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+            t.extend([[v, v + 1, v + 2], [v, v + 2, v + 3]]);
+        }
+    }
+    (p, uv, t)
+}
+
+/// A camera node at `eye` looking at `target` (+Y up): glTF cameras look down their -Z.
+fn camera_node(eye: Vec3, target: Vec3, vfov_deg: f32) -> (Value, Value) {
+    let f = (target - eye).normalize();
+    let r = f.cross(Vec3::Y).normalize();
+    let u = r.cross(f);
+    let m = Mat4::from_cols(r.extend(0.0), u.extend(0.0), (-f).extend(0.0), eye.extend(1.0));
+    (
+        json!({"camera": 0, "matrix": m.to_cols_array()}),
+        json!([{"type": "perspective", "perspective": {"yfov": vfov_deg.to_radians(), "aspectRatio": 1.0, "znear": 0.01}}]),
+    )
+}
+
+/// The furnace cube as glTF with `material` (and `images`/`textures`/`samplers` in `extra`).
+fn furnace(dir: &Path, name: &str, material: Value, extra: Value) -> Scene {
+    let (p, uv, t) = cube();
+    let mut g = Gltf::default();
+    let prim = g.primitive(&p, Some(&uv), &t, 0);
+    let (cam, cameras) = camera_node(Vec3::new(0.1, -0.2, 0.05), Vec3::new(0.4, 0.3, 1.0), 90.0);
+    let mut top = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, cam],
+        "cameras": cameras,
+        "meshes": [{"primitives": [prim]}],
+        "materials": [material],
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        top[k] = v.clone();
+    }
+    let path = g.write(dir, name, top);
+    Scene::load(path).unwrap()
+}
+
+fn furnace_material(base: Value, texture: Option<usize>) -> Value {
+    let mut pbr = json!({"baseColorFactor": base, "metallicFactor": 0.0, "roughnessFactor": 1.0});
+    if let Some(t) = texture {
+        pbr["baseColorTexture"] = json!({"index": t});
+    }
+    json!({"name": "furnace", "pbrMetallicRoughness": pbr, "emissiveFactor": [1.0, 1.0, 1.0]})
+}
+
+fn settings() -> RenderSettings {
+    RenderSettings {
+        photons: Some(20_000),
+        caustic_photons: Some(2_000),
+        spp: Some(4),
+        seed: Some(7),
+        ..Default::default()
+    }
+}
+
+fn same_pixels(a: &Film, b: &Film) -> bool {
+    a.pixels
+        .iter()
+        .zip(&b.pixels)
+        .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits))
+}
+
+#[test]
+fn the_gltf_furnace_renders_two() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = furnace(dir.path(), "cube", furnace_material(json!([0.5, 0.5, 0.5, 1.0]), None), json!({}));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.materials, [Material::Emissive { kd: Vec3::splat(0.5), ke: Vec3::ONE }]);
+    assert_eq!((s.camera.width, s.camera.height), (256, 256), "the glTF camera's default size");
+    for integrator in [IntegratorKind::Photon, IntegratorKind::Path] {
+        let r = RenderSettings { integrator: Some(integrator), ..settings() };
+        let mean = render_checked(&s, &r, 16).film.mean();
+        assert!((mean - 2.0).abs() < 0.02, "{integrator:?}: mean {mean}");
+    }
+}
+
+#[test]
+fn a_constant_png_base_colour_renders_as_its_constant_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(4, 4, image::Rgb([188, 188, 188])).save(d.join("grey.png")).unwrap();
+    let png = std::fs::read(d.join("grey.png")).unwrap();
+    let kd = (((188.0f64 / 255.0 + 0.055) / 1.055).powf(2.4)) as f32;
+    let plain =
+        furnace(d, "plain", furnace_material(json!([kd * 0.5, kd * 0.5, kd * 0.5, 1.0]), None), json!({}));
+    let want = render_checked(&plain, &settings(), 16).film;
+    // The same image three ways: a file beside the glTF, a data URI, and a buffer view of a GLB-less
+    // glTF (in its own buffer, written as a second .bin).
+    std::fs::write(d.join("img.bin"), &png).unwrap();
+    let data_uri = format!("data:image/png;base64,{}", base64(&png));
+    let sources = [
+        json!({"images": [{"uri": "grey.png"}]}),
+        json!({"images": [{"uri": data_uri}]}),
+        json!({"images": [{"bufferView": 0, "mimeType": "image/png"}]}),
+    ];
+    for (i, images) in sources.into_iter().enumerate() {
+        let mut extra = json!({"textures": [{"source": 0, "sampler": 0}], "samplers": [{"wrapS": 10497, "wrapT": 10497}]});
+        extra["images"] = images["images"].clone();
+        let s = if i == 2 {
+            // The image in buffer view 0: build the file with the PNG's view first.
+            let (p, uv, t) = cube();
+            let mut g = Gltf::default();
+            g.view(&png);
+            let prim = g.primitive(&p, Some(&uv), &t, 0);
+            let (cam, cameras) = camera_node(Vec3::new(0.1, -0.2, 0.05), Vec3::new(0.4, 0.3, 1.0), 90.0);
+            extra["scenes"] = json!([{"nodes": [0, 1]}]);
+            extra["nodes"] = json!([{"mesh": 0}, cam]);
+            extra["cameras"] = cameras;
+            extra["meshes"] = json!([{"primitives": [prim]}]);
+            extra["materials"] = json!([furnace_material(json!([0.5, 0.5, 0.5, 1.0]), Some(0))]);
+            Scene::load(g.write(d, "view", extra)).unwrap()
+        } else {
+            furnace(d, &format!("tex{i}"), furnace_material(json!([0.5, 0.5, 0.5, 1.0]), Some(0)), extra)
+        };
+        assert!(s.textured && s.warnings.is_empty(), "source {i}: {:?}", s.warnings);
+        let got = render_checked(&s, &settings(), 16).film;
+        assert!(same_pixels(&got, &want), "source {i}: the textured furnace differs from kd = {}", kd * 0.5);
+    }
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut s = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16 | (*c.get(1).unwrap_or(&0) as u32) << 8 | *c.get(2).unwrap_or(&0) as u32;
+        for k in 0..=c.len() {
+            s.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
+        }
+    }
+    while s.len() % 4 != 0 {
+        s.push('=');
+    }
+    s
+}
+
+#[test]
+fn node_transforms_compose_parent_matrix_and_child_trs() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    // A triangle in the XY plane, facing +Z.
+    let tri = [Vec3::ZERO, Vec3::X, Vec3::Y];
+    let prim = g.primitive(&tri, None, &[[0, 1, 2]], 0);
+    let parent =
+        Mat4::from_scale_rotation_translation(Vec3::splat(2.0), Quat::IDENTITY, Vec3::new(1.0, 2.0, 3.0));
+    let rot = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
+    let (t, s) = (Vec3::new(1.0, 0.0, 0.0), Vec3::new(1.0, 1.0, -1.0));
+    let child = Mat4::from_scale_rotation_translation(s, rot, t);
+    let path = g.write(
+        dir.path(),
+        "nodes",
+        json!({
+            "extensionsUsed": ["KHR_lights_punctual"],
+            "extensions": {"KHR_lights_punctual": {"lights": [
+                {"type": "spot", "color": [1.0, 0.5, 0.25], "intensity": 4.0, "spot": {"innerConeAngle": 0.2, "outerConeAngle": 0.6}}
+            ]}},
+            "scenes": [{"nodes": [0]}],
+            "nodes": [
+                {"matrix": parent.to_cols_array(), "children": [1, 2]},
+                {"mesh": 0, "translation": t.to_array(), "rotation": rot.to_array(), "scale": s.to_array()},
+                {"translation": [0.0, 0.0, 1.0], "extensions": {"KHR_lights_punctual": {"light": 0}}, "children": [3]},
+                {"camera": 0, "rotation": Quat::from_rotation_y(std::f32::consts::PI).to_array()}
+            ],
+            "cameras": [{"type": "perspective", "perspective": {"yfov": 1.0, "aspectRatio": 1.5, "znear": 0.1}}],
+            "meshes": [{"primitives": [prim]}],
+            "materials": [{"name": "m", "pbrMetallicRoughness": {"metallicFactor": 0.0}}]
+        }),
+    );
+    let scene = Scene::load(&path).unwrap();
+    let world = parent * child;
+    let want: Vec<Vec3> = tri.iter().map(|&p| world.transform_point3(p)).collect();
+    for (got, want) in scene.mesh.positions.iter().zip(&want) {
+        assert!((*got - *want).length() < 1e-5, "{got} vs {want}");
+    }
+    // (1,2,3) + 2 * (rot (x, y, -z) + (1,0,0)): the vertices at (3,2,3), (3,4,3), (1,2,3).
+    assert!((scene.mesh.positions[1] - Vec3::new(3.0, 4.0, 3.0)).length() < 1e-5);
+    // The child mirrors z (determinant < 0): the winding is reversed so that the front face
+    // is where the inverse transpose takes the front normal +Z.
+    let n = scene.mesh.normal(0).unwrap();
+    let want_n = (Mat4::inverse(&world).transpose().transform_vector3(Vec3::Z)).normalize();
+    assert!((n - want_n).length() < 1e-5, "front normal {n}, expected {want_n}");
+    // The spot light at the parent's (0,0,1): (1,2,5), pointing along the parent's -Z.
+    match scene.lights[..] {
+        [LightDesc::Spot { position, direction, intensity, cone_deg, falloff_deg }] => {
+            assert!((position - Vec3::new(1.0, 2.0, 5.0)).length() < 1e-5, "{position}");
+            assert!((direction - Vec3::NEG_Z).length() < 1e-5, "{direction}");
+            assert_eq!(intensity, Vec3::new(4.0, 2.0, 1.0));
+            assert!((cone_deg - 0.6f32.to_degrees()).abs() < 1e-4);
+            assert!((falloff_deg - 0.4f32.to_degrees()).abs() < 1e-3);
+        }
+        ref other => panic!("lights {other:?}"),
+    }
+    // The camera under the light, turned to look down +Z; 1.5 aspect at the default height.
+    let c = &scene.camera;
+    assert!((c.eye - Vec3::new(1.0, 2.0, 5.0)).length() < 1e-5, "{}", c.eye);
+    assert!((c.forward - Vec3::Z).length() < 1e-5, "{}", c.forward);
+    assert!((c.up - Vec3::Y).length() < 1e-5);
+    assert_eq!((c.width, c.height), (384, 256));
+    assert!((c.tan_half_fov - 0.5f32.tan()).abs() < 1e-6);
+    // Metallic 0, default roughness 1 and base colour 1: diffuse white.
+    assert_eq!(scene.materials, [Material::Diffuse { kd: Vec3::ONE }]);
+}
+
+#[test]
+fn the_gltf_cornell_box_renders_as_the_obj_one() {
+    let obj = common::scene("cornell");
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    let mut primitives = Vec::new();
+    let mut materials = Vec::new();
+    for (id, m) in obj.materials.iter().enumerate() {
+        // This material's triangles, with their own copy of the vertices.
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for (tri, _) in obj.mesh.indices.iter().zip(&obj.tri_material).filter(|(_, &k)| k as usize == id) {
+            let v = p.len() as u32;
+            p.extend(tri.iter().map(|&i| obj.mesh.positions[i as usize]));
+            t.push([v, v + 1, v + 2]);
+        }
+        primitives.push(g.primitive(&p, None, &t, id));
+        let pbr = |kd: Vec3| json!({"baseColorFactor": [kd.x, kd.y, kd.z, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0});
+        let name = &obj.material_names[id];
+        materials.push(match *m {
+            Material::Diffuse { kd } => json!({"name": name, "pbrMetallicRoughness": pbr(kd)}),
+            Material::Emissive { kd, ke } => {
+                let s = ke.max_element();
+                json!({"name": name, "pbrMetallicRoughness": pbr(kd), "emissiveFactor": (ke / s).to_array(),
+                       "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": s}}})
+            }
+            other => panic!("the Cornell box has no {other:?}"),
+        });
+    }
+    let c = &obj.camera;
+    let vfov = (2.0 * c.tan_half_fov.atan()).to_degrees();
+    let (cam, cameras) = camera_node(c.eye, c.eye + c.forward, vfov);
+    let path = g.write(
+        dir.path(),
+        "cornell",
+        json!({
+            "extensionsUsed": ["KHR_materials_emissive_strength"],
+            "scene": 0,
+            "scenes": [{"nodes": [0, 1]}],
+            "nodes": [{"mesh": 0}, cam],
+            "cameras": cameras,
+            "meshes": [{"primitives": primitives}],
+            "materials": materials,
+        }),
+    );
+    let gltf = Scene::load(&path).unwrap();
+    assert!(gltf.warnings.is_empty(), "{:?}", gltf.warnings);
+    assert_eq!(gltf.mesh.len(), obj.mesh.len());
+    let r = RenderSettings { photons: Some(100_000), spp: Some(16), seed: Some(3), ..Default::default() };
+    let a = render_checked(&obj, &r, 32).film;
+    let b = render_checked(&gltf, &r, 32).film;
+    let a2 = render_checked(&obj, &RenderSettings { seed: Some(4), ..r.clone() }, 32).film;
+    let mean = |f: &Film| f.pixels.iter().copied().sum::<Vec3>() / f.pixels.len() as f32;
+    let rmse = |x: &Film, y: &Film| {
+        let s: f32 = x.pixels.iter().zip(&y.pixels).map(|(p, q)| (*p - *q).length_squared()).sum();
+        (s / (3 * x.pixels.len()) as f32).sqrt()
+    };
+    let (ma, mb) = (mean(&a), mean(&b));
+    let (same_seed, noise) = (rmse(&a, &b), rmse(&a, &a2));
+    println!("obj {ma}, gltf {mb}; RMSE glTF vs OBJ {same_seed}, OBJ seed 3 vs 4 {noise}");
+    for k in 0..3 {
+        assert!((ma[k] - mb[k]).abs() < 0.01 * ma[k], "channel {k}: obj {ma} vs gltf {mb}");
+    }
+    assert!(same_seed <= 1.2 * noise, "RMSE {same_seed} against noise {noise}");
+}
+
+/// One triangle per material of `materials`, seen by a glTF camera.
+fn triangles(dir: &Path, name: &str, materials: Value, extra: Value) -> Scene {
+    let mut g = Gltf::default();
+    let n = materials.as_array().unwrap().len();
+    let mut prims: Vec<Value> = (0..n)
+        .map(|i| {
+            let z = -(i as f32) - 2.0;
+            let tri = [Vec3::new(0.0, 0.0, z), Vec3::new(1.0, 0.0, z), Vec3::new(0.0, 1.0, z)];
+            g.primitive(&tri, None, &[[0, 1, 2]], i)
+        })
+        .collect();
+    // A LINES primitive: warned and skipped.
+    let mut lines = prims[0].clone();
+    lines["mode"] = json!(1);
+    prims.push(lines);
+    let mut top = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 1.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "meshes": [{"primitives": prims}],
+        "materials": materials,
+    });
+    for (k, v) in extra.as_object().unwrap() {
+        top[k] = v.clone();
+    }
+    Scene::load(g.write(dir, name, top)).unwrap()
+}
+
+#[test]
+fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([188, 188, 188])).save(d.join("grey.png")).unwrap();
+    let pbr = |base: [f32; 3], metal: f32, rough: f32| json!({"baseColorFactor": [base[0], base[1], base[2], 1.0], "metallicFactor": metal, "roughnessFactor": rough});
+    let materials = json!([
+        {"name": "mirror", "pbrMetallicRoughness": pbr([0.9, 0.8, 0.7], 1.0, 0.0)},
+        {"name": "metal", "pbrMetallicRoughness": pbr([0.9, 0.8, 0.7], 1.0, 0.5)},
+        {"name": "plastic", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.3)},
+        {"name": "matte", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.7), "alphaMode": "BLEND",
+         "normalTexture": {"index": 0}},
+        {"name": "glass", "pbrMetallicRoughness": pbr([1.0, 1.0, 1.0], 0.0, 0.0),
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.33}}},
+        {"name": "lamp", "pbrMetallicRoughness": pbr([0.2, 0.2, 0.2], 0.0, 1.0), "emissiveFactor": [1.0, 0.5, 0.25],
+         "emissiveTexture": {"index": 0},
+         "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}}
+    ]);
+    let extra = json!({
+        "extensionsUsed": ["KHR_materials_transmission", "KHR_materials_ior", "KHR_materials_emissive_strength", "KHR_materials_clearcoat"],
+        "textures": [{"source": 0}],
+        "images": [{"uri": "grey.png"}]
+    });
+    let s = triangles(d, "materials", materials, extra);
+    let grey = (((188.0f64 / 255.0 + 0.055) / 1.055).powf(2.4)) as f32;
+    let ns = |r: f32| photonmap::scene::phong_exponent(r);
+    assert!((ns(0.5) - 30.0).abs() < 1e-3 && (ns(0.3) - (2.0 / 0.3f32.powi(4) - 2.0)).abs() < 1e-2);
+    let by_name = |n: &str| s.materials[s.material_names.iter().position(|m| m == n).unwrap()];
+    let base = Vec3::new(0.9, 0.8, 0.7);
+    assert_eq!(by_name("mirror"), Material::Mirror { ks: base });
+    assert_eq!(by_name("metal"), Material::Glossy { kd: Vec3::ZERO, ks: base, ns: ns(0.5) });
+    let colour = Vec3::new(0.5, 0.25, 1.0);
+    assert_eq!(
+        by_name("plastic"),
+        Material::Glossy { kd: colour * 0.96, ks: Vec3::splat(0.04), ns: ns(0.3) }
+    );
+    assert_eq!(by_name("matte"), Material::Diffuse { kd: colour });
+    assert_eq!(by_name("glass"), Material::Glass { ior: 1.33 });
+    match by_name("lamp") {
+        Material::Emissive { kd, ke } => {
+            assert_eq!(kd, Vec3::splat(0.2));
+            assert!((ke - Vec3::new(4.0, 2.0, 1.0) * grey).length() < 1e-5, "{ke}");
+        }
+        other => panic!("lamp: {other:?}"),
+    }
+    assert_eq!(s.mesh.len(), 6, "the LINES primitive is skipped");
+    let warnings = s.warnings.join("\n");
+    for want in [
+        "KHR_materials_clearcoat is not read",
+        "alphaMode Blend (material matte)",
+        "normalTexture (material matte) is not rendered",
+        "emissive texture averaged",
+        "mode Lines is not drawn",
+    ] {
+        assert!(warnings.contains(want), "no warning `{want}` in:\n{warnings}");
+    }
+    assert_eq!(s.warnings.len(), 5, "{warnings}");
+    assert_eq!((s.camera.width, s.camera.height), (256, 256));
+}
+
+#[test]
+fn a_scene_file_places_a_gltf_overrides_its_materials_and_adds_lights() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gltf");
+    for f in ["quad.gltf", "quad.bin"] {
+        std::fs::copy(fixture.join(f), d.join(f)).unwrap();
+    }
+    let toml = "[[mesh]]\ngltf = \"quad.gltf\"\ntranslate = [0.0, 1.0, 0.0]\n\n\
+                [materials.floor]\ntype = \"glossy\"\nks = [0.1, 0.1, 0.1]\nns = 20.0\n\n\
+                [[light]]\ntype = \"distant\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]\n";
+    std::fs::write(d.join("s.toml"), toml).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    // The floor's diffuse 0.8 kept, the scene file's type, ks and ns over it.
+    assert_eq!(s.materials, [Material::Glossy { kd: Vec3::splat(0.8), ks: Vec3::splat(0.1), ns: 20.0 }]);
+    assert!(s.mesh.positions.iter().all(|p| p.y == 1.0), "translate moves the glTF's triangles");
+    assert_eq!(s.lights.len(), 2, "the file's distant light and the glTF's point light");
+    assert!(matches!(s.lights[1], LightDesc::Point { intensity, .. } if intensity == Vec3::splat(2.0)));
+    // The glTF's camera stands in for a missing [camera]; moving the mesh is said not to move it.
+    assert!((s.camera.eye - Vec3::new(0.0, 1.0, 3.0)).length() < 1e-5);
+    assert!(s.warnings.iter().any(|w| w.contains("not its camera and lights")), "{:?}", s.warnings);
+    // With a [camera], that one is used.
+    let with_camera = format!(
+        "[camera]\neye = [0.0, 2.0, 2.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 50.0\nwidth = 32\nheight = 24\n\n{toml}"
+    );
+    std::fs::write(d.join("s.toml"), with_camera).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    assert_eq!((s.camera.eye, s.camera.width, s.camera.height), (Vec3::new(0.0, 2.0, 2.0), 32, 24));
+}
+
+#[test]
+fn the_shipped_boxtextured_scene_loads_textured_without_warnings() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let s = Scene::load(root.join("scenes/boxtextured/boxtextured.toml")).unwrap();
+    assert!(s.textured && s.warnings.is_empty(), "{:?}", s.warnings);
+    assert_eq!(s.mesh.len(), 12 + 2);
+    let box_only = Scene::load(root.join("scenes/boxtextured/BoxTextured.gltf"));
+    let e = box_only.expect_err("BoxTextured has no camera").to_string();
+    assert!(e.contains("no perspective camera"), "{e}");
+}
+
+#[test]
+fn sparse_accessors_and_u8_indices_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = Gltf::default();
+    let base: Vec<u8> =
+        [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let base_view = g.view(&base);
+    // Vertex 2 moved from (0,1,0) to (0,2,0) by a sparse value.
+    let idx_view = g.view(&2u16.to_le_bytes());
+    let val: Vec<u8> = [0.0f32, 2.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+    let val_view = g.view(&val);
+    g.accessors.push(json!({
+        "bufferView": base_view, "componentType": 5126, "count": 3, "type": "VEC3",
+        "min": [0.0, 0.0, 0.0], "max": [1.0, 2.0, 0.0],
+        "sparse": {"count": 1, "indices": {"bufferView": idx_view, "componentType": 5123},
+                   "values": {"bufferView": val_view}}
+    }));
+    let tri_view = g.view(&[0u8, 1, 2]);
+    g.accessors.push(json!({"bufferView": tri_view, "componentType": 5121, "count": 3, "type": "SCALAR"}));
+    let (cam, cameras) = camera_node(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 40.0);
+    let path = g.write(
+        dir.path(),
+        "sparse",
+        json!({
+            "scenes": [{"nodes": [0, 1]}],
+            "nodes": [{"mesh": 0}, cam],
+            "cameras": cameras,
+            "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}]
+        }),
+    );
+    let s = Scene::load(path).unwrap();
+    assert_eq!(s.mesh.positions, [Vec3::ZERO, Vec3::X, Vec3::new(0.0, 2.0, 0.0)]);
+    assert_eq!(s.mesh.indices, [[0, 1, 2]]);
+    assert_eq!(s.material_names, ["(default grey)"]);
+}
