@@ -110,6 +110,11 @@ impl Texture {
     /// Decodes an image held in memory (a glTF's embedded image); `name` stands for its path
     /// in messages. The same formats and encodings as [`Texture::load`].
     pub fn from_memory(name: &Path, bytes: &[u8]) -> Result<Texture, String> {
+        Texture::from_memory_as(name, bytes, Encoding::Colour)
+    }
+
+    /// [`Texture::from_memory`], the values read as `encoding` says.
+    pub fn from_memory_as(name: &Path, bytes: &[u8], encoding: Encoding) -> Result<Texture, String> {
         let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| format!("texture {}: {e}", name.display()))?;
@@ -124,7 +129,7 @@ impl Texture {
             ));
         }
         let image = image::load_from_memory(bytes).map_err(|e| format!("texture {}: {e}", name.display()))?;
-        Ok(Texture::from_image(name, image, Encoding::Colour))
+        Ok(Texture::from_image(name, image, encoding))
     }
 
     fn from_image(path: &Path, image: image::DynamicImage, encoding: Encoding) -> Texture {

@@ -467,13 +467,19 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     for want in [
         "KHR_materials_clearcoat is not read",
         "alphaMode Blend (material matte)",
-        "normalTexture (material matte) is not rendered",
         "emissive texture averaged",
         "mode Lines is not drawn",
+        "no mesh has texture coordinates",
     ] {
         assert!(warnings.contains(want), "no warning `{want}` in:\n{warnings}");
     }
     assert_eq!(s.warnings.len(), 5, "{warnings}");
+    // The normal map is the same image read as data (linear 188/255), not as a colour.
+    let matte = s.material_names.iter().position(|m| m == "matte").unwrap();
+    let normal = s.maps[matte].normal.expect("matte's normalTexture is a normal map");
+    let texel =
+        s.textures.get(normal.texture).sample(glam::Vec2::new(0.5, 0.5), photonmap::texture::Wrap::Repeat);
+    assert!((texel.x - 188.0 / 255.0).abs() < 1e-6, "{texel}");
     assert_eq!((s.camera.width, s.camera.height), (256, 256));
 }
 

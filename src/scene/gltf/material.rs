@@ -20,7 +20,7 @@ use super::super::obj::MtlMaterial;
 use super::super::SceneError;
 use super::data::{at, uri_bytes, Buffers};
 use super::Warnings;
-use crate::texture::{Texture, Textures, Wrap};
+use crate::texture::{Encoding, Texture, Textures, Wrap};
 use glam::{Vec2, Vec3};
 use gltf::texture::WrappingMode;
 use std::collections::HashMap;
@@ -44,14 +44,14 @@ pub struct Images<'a> {
     pub path: &'a Path,
     pub buffers: &'a Buffers,
     pub textures: &'a mut Textures,
-    pub loaded: HashMap<usize, u32>,
+    pub loaded: HashMap<(usize, Encoding), u32>,
 }
 
 impl Images<'_> {
     /// The texture of image `image`, loaded once: a file through [`Textures::get_or_load`],
     /// a buffer view or `data:` URI decoded from memory.
-    fn texture(&mut self, field: &str, image: gltf::Image) -> Result<u32, SceneError> {
-        if let Some(&t) = self.loaded.get(&image.index()) {
+    fn texture(&mut self, field: &str, image: gltf::Image, encoding: Encoding) -> Result<u32, SceneError> {
+        if let Some(&t) = self.loaded.get(&(image.index(), encoding)) {
             return Ok(t);
         }
         let path = self.path;
@@ -59,11 +59,12 @@ impl Images<'_> {
         let t = match image.source() {
             gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
                 let file = super::super::obj::relative_to(path, Path::new(&super::data::percent_decode(uri)));
-                self.textures.get_or_load(&file).map_err(|e| at(path, field, e))?
+                self.textures.get_or_load_as(&file, encoding).map_err(|e| at(path, field, e))?
             }
             gltf::image::Source::Uri { uri, .. } => {
                 let bytes = uri_bytes(path, &format!("images[{}].uri", image.index()), uri)?;
-                let t = Texture::from_memory(Path::new(&name), &bytes).map_err(|e| at(path, field, e))?;
+                let t = Texture::from_memory_as(Path::new(&name), &bytes, encoding)
+                    .map_err(|e| at(path, field, e))?;
                 self.textures.push(t)
             }
             gltf::image::Source::View { view, .. } => {
@@ -79,11 +80,12 @@ impl Images<'_> {
                             format!("bufferView {} runs past the end of its buffer", view.index()),
                         )
                     })?;
-                let t = Texture::from_memory(Path::new(&name), bytes).map_err(|e| at(path, field, e))?;
+                let t = Texture::from_memory_as(Path::new(&name), bytes, encoding)
+                    .map_err(|e| at(path, field, e))?;
                 self.textures.push(t)
             }
         };
-        self.loaded.insert(image.index(), t);
+        self.loaded.insert((image.index(), encoding), t);
         Ok(t)
     }
 
@@ -95,11 +97,24 @@ impl Images<'_> {
         factor: Vec3,
         warnings: &mut Warnings,
     ) -> Result<TextureRef, SceneError> {
-        let tex = info.texture();
-        if info.tex_coord() != 0 {
+        self.reference_to(field, info.texture(), info.tex_coord(), factor, Encoding::Colour, warnings)
+    }
+
+    /// A texture reference for texture `tex` read through `TEXCOORD_<tex_coord>`, its image
+    /// read as `encoding`.
+    fn reference_to(
+        &mut self,
+        field: &str,
+        tex: gltf::Texture,
+        tex_coord: u32,
+        factor: Vec3,
+        encoding: Encoding,
+        warnings: &mut Warnings,
+    ) -> Result<TextureRef, SceneError> {
+        if tex_coord != 0 {
             warnings.say(
-                format!("texcoord{}", info.tex_coord()),
-                format!("{field}: TEXCOORD_{} is not read; TEXCOORD_0 is used", info.tex_coord()),
+                format!("texcoord{tex_coord}"),
+                format!("{field}: TEXCOORD_{tex_coord} is not read; TEXCOORD_0 is used"),
             );
         }
         let sampler = tex.sampler();
@@ -115,7 +130,7 @@ impl Images<'_> {
                 Wrap::Repeat
             }
         };
-        let texture = self.texture(field, tex.source())?;
+        let texture = self.texture(field, tex.source(), encoding)?;
         Ok(TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap, factor })
     }
 }
@@ -171,10 +186,30 @@ pub fn material(
             format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not rendered; the factors are used"),
         );
     }
-    for (what, present) in [
-        ("normalTexture", m.normal_texture().is_some()),
-        ("occlusionTexture", m.occlusion_texture().is_some()),
-    ] {
+    let normal = match m.normal_texture() {
+        None => None,
+        Some(nt) => {
+            let f = format!("{field}.normalTexture");
+            if nt.scale() != 1.0 {
+                warnings.say(
+                    format!("normal-scale {name}"),
+                    format!(
+                        "{f}.scale {} (material {name}) is not applied; the map is read as 1",
+                        nt.scale()
+                    ),
+                );
+            }
+            Some(images.reference_to(
+                &f,
+                nt.texture(),
+                nt.tex_coord(),
+                Vec3::ONE,
+                Encoding::Data,
+                warnings,
+            )?)
+        }
+    };
+    for (what, present) in [("occlusionTexture", m.occlusion_texture().is_some())] {
         if present {
             warnings
                 .say(format!("{what} {name}"), format!("{field}.{what} (material {name}) is not rendered"));
@@ -195,7 +230,7 @@ pub fn material(
         );
     }
     let mut mtl = MtlMaterial::default();
-    let mut maps = MaterialMaps::default();
+    let mut maps = MaterialMaps { normal, ..MaterialMaps::default() };
     let unit = |v: Vec3| v.clamp(Vec3::ZERO, Vec3::ONE).to_array();
     if ke.max_element() > 0.0 {
         mtl.ke = Some(ke.to_array());
