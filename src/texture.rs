@@ -85,26 +85,8 @@ impl Texture {
 
     /// [`Texture::load`], the values read as `encoding` says.
     pub fn load_as(path: &Path, encoding: Encoding) -> Result<Texture, String> {
-        let reader = image::ImageReader::open(path)
-            .map_err(|e| format!("texture {}: {e}", path.display()))?
-            .with_guessed_format()
-            .map_err(|e| format!("texture {}: {e}", path.display()))?;
-        if reader.format().is_none() {
-            return Err(format!("texture {}: not an image format photonmap reads", path.display()));
-        }
-        let (w, h) = reader.into_dimensions().map_err(|e| format!("texture {}: {e}", path.display()))?;
-        if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-            return Err(format!(
-                "texture {}: {w}x{h} is not a usable size (1 to {MAX_SIDE} texels a side)",
-                path.display()
-            ));
-        }
-        let image = image::ImageReader::open(path)
-            .and_then(|r| r.with_guessed_format())
-            .map_err(|e| format!("texture {}: {e}", path.display()))?
-            .decode()
-            .map_err(|e| format!("texture {}: {e}", path.display()))?;
-        Ok(Texture::from_image(path, image, encoding))
+        let bytes = std::fs::read(path).map_err(|e| format!("texture {}: {e}", path.display()))?;
+        Texture::from_memory_as(path, &bytes, encoding)
     }
 
     /// Decodes an image held in memory (a glTF's embedded image); `name` stands for its path
