@@ -183,16 +183,16 @@ impl Texture {
         }
     }
 
-    /// Linear RGBA at `uv`, bilinearly filtered.
+    /// The four texels around `uv` (top-left, top-right, bottom-left, bottom-right in image
+    /// rows, row 0 at `v = 1`) and the position between them.
     #[inline]
-    pub fn sample(&self, uv: Vec2, wrap: Wrap) -> Vec4 {
+    fn cell(&self, uv: Vec2, wrap: Wrap) -> ([Vec4; 4], f32, f32) {
         let (w, h) = (self.width, self.height);
         let u = if uv.x.is_finite() { uv.x } else { 0.0 };
         let v = if uv.y.is_finite() { uv.y } else { 0.0 };
         let x = u * w as f32 - 0.5;
         let y = (1.0 - v) * h as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
         let index = |i: f32, n: u32| -> u32 {
             match wrap {
                 Wrap::Repeat => (i as i64).rem_euclid(n as i64) as u32,
@@ -201,9 +201,26 @@ impl Texture {
         };
         let (xa, xb) = (index(x0, w), index(x0 + 1.0, w));
         let (ya, yb) = (index(y0, h), index(y0 + 1.0, h));
-        let top = self.texel(xa, ya).lerp(self.texel(xb, ya), fx);
-        let bottom = self.texel(xa, yb).lerp(self.texel(xb, yb), fx);
-        top.lerp(bottom, fy)
+        let corners = [self.texel(xa, ya), self.texel(xb, ya), self.texel(xa, yb), self.texel(xb, yb)];
+        (corners, x - x0, y - y0)
+    }
+
+    /// Linear RGBA at `uv`, bilinearly filtered.
+    #[inline]
+    pub fn sample(&self, uv: Vec2, wrap: Wrap) -> Vec4 {
+        let ([a, b, c, d], fx, fy) = self.cell(uv, wrap);
+        a.lerp(b, fx).lerp(c.lerp(d, fx), fy)
+    }
+
+    /// The bilinear filter's derivatives at `uv`, `(d/du, d/dv)` per channel: the exact slopes of
+    /// what [`Texture::sample`] returns, constant across each texel cell (for bump mapping).
+    #[inline]
+    pub fn gradient(&self, uv: Vec2, wrap: Wrap) -> (Vec4, Vec4) {
+        let ([a, b, c, d], fx, fy) = self.cell(uv, wrap);
+        let d_dx = (b - a).lerp(d - c, fy);
+        let d_dy = c.lerp(d, fx) - a.lerp(b, fx);
+        // x = u w - 1/2 and y = (1 - v) h - 1/2.
+        (d_dx * self.width as f32, d_dy * -(self.height as f32))
     }
 
     /// Whether every texel is grey (red, green and blue equal): a height map, not a normal map.
@@ -321,6 +338,31 @@ mod tests {
             t.sample(Vec2::new(0.0, 0.75), Wrap::Repeat)
         );
         assert!((t.mean().x - 0.5).abs() < 1e-6);
+    }
+
+    #[test]
+    fn the_gradient_is_the_slope_of_the_bilinear_filter() {
+        let texels = (0..12).map(|i| Vec4::splat(((i * 7) % 5) as f32 * 0.3)).collect();
+        let t = Texture::from_linear(Path::new("g"), 4, 3, texels);
+        for k in 0..50 {
+            let uv = Vec2::new((k as f32 * 0.1237).fract(), (k as f32 * 0.3719).fract());
+            let (du, dv) = t.gradient(uv, Wrap::Repeat);
+            let h = 1e-3;
+            let fd =
+                |e: Vec2| (t.sample(uv + e, Wrap::Repeat) - t.sample(uv - e, Wrap::Repeat)).x / (2.0 * h);
+            let (fu, fv) = (fd(Vec2::new(h, 0.0)), fd(Vec2::new(0.0, h)));
+            // Away from cell edges (where the slope jumps) the finite difference is exact.
+            let x = uv.x * 4.0 - 0.5;
+            let y = (1.0 - uv.y) * 3.0 - 0.5;
+            let near_edge = |c: f32, n: f32| (c - c.round()).abs() < h * n * 2.0;
+            if !near_edge(x, 4.0) && !near_edge(y, 3.0) {
+                assert!((du.x - fu).abs() < 2e-2, "d/du at {uv}: {} vs {fu}", du.x);
+                assert!((dv.x - fv).abs() < 2e-2, "d/dv at {uv}: {} vs {fv}", dv.x);
+            }
+        }
+        // A constant image has no slope anywhere, exactly.
+        let flat = Texture::from_linear(Path::new("f"), 2, 2, vec![Vec4::splat(0.7); 4]);
+        assert_eq!(flat.gradient(Vec2::new(0.3, 0.9), Wrap::Repeat), (Vec4::ZERO, Vec4::ZERO));
     }
 
     #[test]

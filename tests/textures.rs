@@ -258,3 +258,88 @@ fn a_normal_map_leans_the_shading_normal_its_way() {
         .iter()
         .all(|p| p.is_finite()));
 }
+
+/// The floor of [`mapped_floor`] with a height map that rises along +u (`h = u`, texel centres
+/// at `(i + 1/2) / 8`, clamped), scaled by `-bm slope`, given in the MTL or in the scene file.
+fn bumped_floor(dir: &Path, slope: f32, toward_light: Vec3, in_toml: bool) -> Scene {
+    let ramp = (0..16).map(|i| Vec3::splat(((i % 8) as f32 + 0.5) / 8.0)).collect();
+    Film { width: 8, height: 2, pixels: ramp }.write_exr(&dir.join("ramp.exr")).unwrap();
+    let scene = mapped_floor(dir, None, toward_light);
+    let toml = std::fs::read_to_string(dir.join("s.toml")).unwrap();
+    if in_toml {
+        let entry = format!(
+            "\n[materials.floor]\nkd = [0.5, 0.5, 0.5]\nbump_texture = \"ramp.exr\"\nbump_scale = {slope}\n"
+        );
+        std::fs::write(dir.join("s.toml"), toml + &entry).unwrap();
+    } else {
+        std::fs::write(
+            dir.join("floor.mtl"),
+            format!("newmtl floor\nKd 0.5 0.5 0.5\nmap_Bump -bm {slope} -clamp on ramp.exr\n"),
+        )
+        .unwrap();
+    }
+    drop(scene);
+    Scene::load(dir.join("s.toml")).unwrap()
+}
+
+#[test]
+fn a_height_map_tilts_the_shading_normal_down_its_slope() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = RenderSettings { spp: Some(4), photons: Some(1000), seed: Some(1), ..Default::default() };
+    // The floor is 2 units across u: height u * slope has slope/2 per unit length, so the
+    // normal leans atan(slope / 2) toward -u (away from the rise).
+    let slope = 2.0 * 30f32.to_radians().tan();
+    let from_east = Vec3::new(1.0, 1.0, 0.0).normalize();
+    let from_west = Vec3::new(-1.0, 1.0, 0.0).normalize();
+    let cases = [
+        (Vec3::Y, 0.5 * 30f32.to_radians().cos()),
+        (from_west, 0.5 * 15f32.to_radians().cos()),
+        (from_east, 0.5 * 75f32.to_radians().cos()),
+    ];
+    for (light, expected) in cases {
+        let scene = bumped_floor(dir.path(), slope, light, false);
+        assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+        let m = render_checked(&scene, &s, 8).film.mean();
+        println!("bump, light from {light}: {m:.5}, expected {expected:.5}");
+        assert!((m - expected as f64).abs() < 2e-3, "light {light}: {m} vs {expected}");
+    }
+    // The scene file's bump_texture and bump_scale say the same as the MTL's map_Bump -bm.
+    let mtl = render_checked(&bumped_floor(dir.path(), slope, from_west, false), &s, 8).film;
+    let toml = render_checked(&bumped_floor(dir.path(), slope, from_west, true), &s, 8).film;
+    assert!(same_pixels(&mtl, &toml));
+    // A flat height map (no slope anywhere) leaves the floor exactly as it is without one.
+    let flat = render_checked(&bumped_floor(dir.path(), 0.0, from_west, false), &s, 8).film;
+    let plain = render_checked(&mapped_floor(dir.path(), None, from_west), &s, 8).film;
+    assert!(same_pixels(&flat, &plain));
+}
+
+#[test]
+fn bump_scale_needs_a_bump_map() {
+    let dir = tempfile::tempdir().unwrap();
+    mapped_floor(dir.path(), None, Vec3::Y);
+    let toml = std::fs::read_to_string(dir.path().join("s.toml")).unwrap();
+    let entry = "\n[materials.floor]\nbump_scale = 2.0\n";
+    std::fs::write(dir.path().join("s.toml"), toml + entry).unwrap();
+    let e = Scene::load(dir.path().join("s.toml")).unwrap_err().to_string();
+    assert!(e.contains("materials.floor.bump_scale") && e.contains("no bump map"), "{e}");
+}
+
+#[test]
+fn the_scene_files_normal_texture_is_the_mtls_norm() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = RenderSettings { spp: Some(2), photons: Some(500), seed: Some(3), ..Default::default() };
+    let light = Vec3::new(1.0, 1.0, 0.0).normalize();
+    let mtl = render_checked(&mapped_floor(dir.path(), Some(30.0), light), &s, 8).film;
+    // The same map, named by the scene file over an MTL without it.
+    std::fs::write(dir.path().join("floor.mtl"), "newmtl floor\nKd 0.5 0.5 0.5\n").unwrap();
+    let toml = std::fs::read_to_string(dir.path().join("s.toml")).unwrap();
+    let entry = "\n[materials.floor]\nkd = [0.5, 0.5, 0.5]\nnormal_texture = \"normal.exr\"\n";
+    std::fs::write(dir.path().join("s.toml"), toml.clone() + entry).unwrap();
+    let file = render_checked(&Scene::load(dir.path().join("s.toml")).unwrap(), &s, 8).film;
+    assert!(same_pixels(&mtl, &file));
+    // Both at once are refused, by field.
+    let both = format!("{entry}bump_texture = \"normal.exr\"\n");
+    std::fs::write(dir.path().join("s.toml"), toml + &both).unwrap();
+    let e = Scene::load(dir.path().join("s.toml")).unwrap_err().to_string();
+    assert!(e.contains("materials.floor.bump_texture"), "{e}");
+}

@@ -28,6 +28,19 @@ pub struct SurfaceHit {
     pub t: f32,
 }
 
+/// The triangle's `dp/du` and `dp/dv` (position per unit of texture coordinate), or `None`
+/// where its texture coordinates are degenerate.
+fn uv_tangents(scene: &Scene, tri: [u32; 3]) -> Option<(Vec3, Vec3)> {
+    let [p0, p1, p2] = tri.map(|i| scene.mesh.positions[i as usize]);
+    let [t0, t1, t2] = tri.map(|i| scene.attributes.uvs[i as usize]);
+    let (dp1, dp2, d1, d2) = (p1 - p0, p2 - p0, t1 - t0, t2 - t0);
+    let det = d1.x * d2.y - d2.x * d1.y;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    Some(((dp1 * d2.y - dp2 * d1.y) / det, (dp2 * d1.x - dp1 * d2.x) / det))
+}
+
 /// The shading normal `ns` bent by a tangent-space normal map at `uv`: the map's `2 c - 1`
 /// in the frame of the triangle's `dp/du` (made perpendicular to `ns`), `dp/dv` and `ns`.
 /// `None` where the triangle's texture coordinates are degenerate or the result would face
@@ -40,21 +53,34 @@ fn normal_mapped(
     uv: Vec2,
     map: &TextureRef,
 ) -> Option<Vec3> {
-    let a = &scene.attributes;
-    let [p0, p1, p2] = tri.map(|i| scene.mesh.positions[i as usize]);
-    let [t0, t1, t2] = tri.map(|i| a.uvs[i as usize]);
-    let (dp1, dp2, d1, d2) = (p1 - p0, p2 - p0, t1 - t0, t2 - t0);
-    let det = d1.x * d2.y - d2.x * d1.y;
-    if det == 0.0 || !det.is_finite() {
-        return None;
-    }
-    let dpdu = (dp1 * d2.y - dp2 * d1.y) / det;
-    let dpdv = (dp2 * d1.x - dp1 * d2.x) / det;
+    let (dpdu, dpdv) = uv_tangents(scene, tri)?;
     let t = (dpdu - ns * ns.dot(dpdu)).try_normalize()?;
     // The bitangent keeps the handedness of the texture's (v up) frame.
     let b = ns.cross(t) * if ns.cross(t).dot(dpdv) < 0.0 { -1.0 } else { 1.0 };
     let c = map.rgb(&scene.textures, uv) * 2.0 - Vec3::ONE;
     let bent = (t * c.x + b * c.y + ns * c.z).try_normalize()?;
+    (bent.dot(n) > 0.0).then_some(bent)
+}
+
+/// The shading normal `ns` bent by a height map at `uv` (pbrt's `BumpMap`, Mitsuba's
+/// `bumpmap`): the surface displaced by `h` along `ns` has tangents `dp/du + (dh/du) ns` and
+/// `dp/dv + (dh/dv) ns` (both made perpendicular to `ns` first; the change of `ns` itself
+/// across the triangle is left out, as Mitsuba does), and its normal is their cross product,
+/// on `ns`'s side. `dh/du` is the exact slope of the bilinear filter. Where the slope is zero
+/// (a flat height map) the normal is `ns` exactly; `None` where the texture coordinates are
+/// degenerate or the result would face away from the face.
+fn bumped(scene: &Scene, tri: [u32; 3], n: Vec3, ns: Vec3, uv: Vec2, map: &TextureRef) -> Option<Vec3> {
+    let texture = scene.textures.get(map.texture);
+    let (du, dv) = texture.gradient(uv * map.scale + map.offset, map.wrap);
+    let (hu, hv) = (du.x * map.scale.x * map.factor.x, dv.x * map.scale.y * map.factor.x);
+    if hu == 0.0 && hv == 0.0 {
+        return Some(ns);
+    }
+    let (dpdu, dpdv) = uv_tangents(scene, tri)?;
+    let su = dpdu - ns * ns.dot(dpdu) + ns * hu;
+    let sv = dpdv - ns * ns.dot(dpdv) + ns * hv;
+    let m = su.cross(sv).try_normalize()?;
+    let bent = if m.dot(ns) < 0.0 { -m } else { m };
     (bent.dot(n) > 0.0).then_some(bent)
 }
 
@@ -87,8 +113,11 @@ impl SurfaceHit {
                 }
             }
             if scene.textured && a.has_uvs() {
-                if let Some(map) = scene.maps[scene.tri_material[hit.prim as usize] as usize].normal {
+                let maps = &scene.maps[scene.tri_material[hit.prim as usize] as usize];
+                if let Some(map) = maps.normal {
                     at.ns = normal_mapped(scene, tri, n, at.ns, at.uv, &map).unwrap_or(at.ns);
+                } else if let Some(map) = maps.bump {
+                    at.ns = bumped(scene, tri, n, at.ns, at.uv, &map).unwrap_or(at.ns);
                 }
             }
         }

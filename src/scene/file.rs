@@ -198,6 +198,12 @@ pub struct MaterialEntry {
     pub kd_texture: Option<std::path::PathBuf>,
     /// An image for `ks`, replacing the MTL's `map_Ks`.
     pub ks_texture: Option<std::path::PathBuf>,
+    /// A tangent-space normal map, replacing the MTL's `norm` or colour `map_Bump`.
+    pub normal_texture: Option<std::path::PathBuf>,
+    /// A height map (its red channel, linear), replacing the MTL's grey `map_Bump`.
+    pub bump_texture: Option<std::path::PathBuf>,
+    /// Scene units of height per unit of `bump_texture` (MTL `-bm`; default 1).
+    pub bump_scale: Option<f32>,
 }
 
 /// `[[portal]]`: an opening distant lights send their photons through (see

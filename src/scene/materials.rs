@@ -187,6 +187,10 @@ pub struct MaterialMaps {
     /// of the surface, `+X` along increasing `u`, `+Y` along increasing `v`; linear values
     /// `2 c - 1`) that bends the shading normal.
     pub normal: Option<TextureRef>,
+    /// A grey `map_Bump`/`bump` (or `bump_texture`): a height map whose slopes bend the shading
+    /// normal (pbrt's and Mitsuba's bump mapping): the surface is displaced along its shading
+    /// normal by the texel value times `factor` (MTL `-bm`, `bump_scale`), in scene units.
+    pub bump: Option<TextureRef>,
 }
 
 impl MaterialMaps {
@@ -256,16 +260,22 @@ fn texture_maps(
             "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "norm" | "map_bump" | "bump" => {
-                let t = from_mtl(map, textures, warnings, Encoding::Data)?;
-                if textures.get(t.texture).is_grey() {
-                    warnings.push(format!(
-                        "{}:{}: `{}` (material {name}) is a height map: height bump maps are not rendered yet, only normal maps",
-                        map.mtl.display(),
-                        map.line,
-                        map.keyword
-                    ));
+                let mut t = from_mtl(map, textures, warnings, Encoding::Data)?;
+                if map.keyword != "norm" && textures.get(t.texture).is_grey() {
+                    t.factor = Vec3::splat(map.bump_multiplier);
+                    maps.bump = Some(t);
+                    maps.normal = None;
                 } else {
+                    if map.bump_multiplier != 1.0 {
+                        warnings.push(format!(
+                            "{}:{}: `{}` (material {name}) is a normal map: its -bm is not applied",
+                            map.mtl.display(),
+                            map.line,
+                            map.keyword
+                        ));
+                    }
                     maps.normal = Some(t);
+                    maps.bump = None;
                 }
             }
             other => warnings.push(format!(
@@ -275,18 +285,43 @@ fn texture_maps(
             )),
         }
     }
-    let from_file = |field: &str, file: &Path, textures: &mut Textures| -> Result<TextureRef, SceneError> {
+    let from_file = |field: &str, file: &Path, textures: &mut Textures, encoding: Encoding| {
         let texture = textures
-            .get_or_load(&relative_to(path, file))
+            .get_or_load_as(&relative_to(path, file), encoding)
             .map_err(|e| SceneError::field(path, format!("materials.{name}.{field}"), e))?;
-        Ok(TextureRef::plain(texture))
+        Ok::<_, SceneError>(TextureRef::plain(texture))
     };
     if let Some(e) = entry {
         if let Some(f) = &e.kd_texture {
-            maps.kd = Some(from_file("kd_texture", f, textures)?);
+            maps.kd = Some(from_file("kd_texture", f, textures, Encoding::Colour)?);
         }
         if let Some(f) = &e.ks_texture {
-            maps.ks = Some(from_file("ks_texture", f, textures)?);
+            maps.ks = Some(from_file("ks_texture", f, textures, Encoding::Colour)?);
+        }
+        if e.normal_texture.is_some() && e.bump_texture.is_some() {
+            return Err(SceneError::field(
+                path,
+                format!("materials.{name}.bump_texture"),
+                "a material takes a normal map or a bump map, not both",
+            ));
+        }
+        if let Some(f) = &e.normal_texture {
+            maps.normal = Some(from_file("normal_texture", f, textures, Encoding::Data)?);
+            maps.bump = None;
+        }
+        if let Some(f) = &e.bump_texture {
+            maps.bump = Some(from_file("bump_texture", f, textures, Encoding::Data)?);
+            maps.normal = None;
+        }
+        if let Some(scale) = e.bump_scale {
+            let field = format!("materials.{name}.bump_scale");
+            if !scale.is_finite() {
+                return Err(SceneError::field(path, field, format!("{scale} is not a finite number")));
+            }
+            match maps.bump.as_mut() {
+                Some(b) => b.factor = Vec3::splat(scale),
+                None => return Err(SceneError::field(path, field, "the material has no bump map to scale")),
+            }
         }
     }
     let uses_kd = matches!(m, Material::Diffuse { .. } | Material::Glossy { .. } | Material::Emissive { .. });

@@ -169,7 +169,7 @@ impl Scene {
         let resolved = materials::resolve(path, &tri_names, given, &file)?;
         warnings.extend(resolved.warnings);
         // (A glTF's emissive texture is loaded for its mean only: no map uses it.)
-        let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some());
+        let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some() || m.bump.is_some());
         if textured && !attributes.has_uvs() {
             warnings.push(
                 "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),

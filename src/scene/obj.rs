@@ -37,7 +37,9 @@ pub struct MtlMap {
     pub offset: Vec2,
     /// `-clamp on`.
     pub clamp: bool,
-    /// Options read but not applied (`-bm`, `-mm`, ...), by name.
+    /// `-bm m` of a `bump`/`map_Bump`: the height map's texels are multiplied by this (default 1).
+    pub bump_multiplier: f32,
+    /// Options read but not applied (`-mm`, `-bm` of a map other than a bump map, ...), by name.
     pub ignored: Vec<String>,
 }
 
@@ -407,8 +409,10 @@ fn parse_map(path: &Path, line: usize, keyword: &str, args: &[&str]) -> Result<M
         scale: Vec2::ONE,
         offset: Vec2::ZERO,
         clamp: false,
+        bump_multiplier: 1.0,
         ignored: Vec::new(),
     };
+    let bump = matches!(map.keyword.as_str(), "bump" | "map_bump");
     let mut i = 0;
     while i < args.len() && args[i].starts_with('-') && args[i].len() > 1 {
         let option = args[i];
@@ -458,6 +462,7 @@ fn parse_map(path: &Path, line: usize, keyword: &str, args: &[&str]) -> Result<M
                 "off" => map.clamp = false,
                 v => return Err(bad(format!("option `-clamp`: `{v}` is neither on nor off"))),
             },
+            "-bm" if bump => map.bump_multiplier = numbers()?[0],
             _ => map.ignored.push(option.to_owned()),
         }
         i += 1 + values.len();
