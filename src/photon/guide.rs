@@ -41,7 +41,7 @@ use crate::sampling::{derive_seed, halton2_lens};
 use glam::Vec3;
 use rand::SeedableRng;
 use rand_pcg::Pcg32;
-use std::collections::HashSet;
+use rustc_hash::FxHashSet;
 
 /// Camera rays across the long side of the image in the pilot that finds the seen region.
 const PILOT_SIDE: u32 = 128;
@@ -86,7 +86,7 @@ pub struct VisibleRegion {
     cell: f32,
     origin: Vec3,
     /// The cells of each level that is in use, finest first.
-    levels: Vec<(usize, HashSet<[i32; 3]>)>,
+    levels: Vec<(usize, FxHashSet<[i32; 3]>)>,
 }
 
 impl VisibleRegion {
@@ -141,7 +141,7 @@ impl VisibleRegion {
             return VisibleRegion::default();
         }
         let mut region = VisibleRegion { cell, origin: landings[0].0, levels: Vec::new() };
-        let mut sets = vec![HashSet::new(); REGION_LEVELS];
+        let mut sets = vec![FxHashSet::default(); REGION_LEVELS];
         for (p, footprint) in landings {
             let level = ((2.0 * footprint / cell).log2().ceil().max(0.0) as usize).min(REGION_LEVELS - 1);
             let [x, y, z] = region.key(p, level);
