@@ -428,7 +428,7 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
         {"name": "metal", "pbrMetallicRoughness": pbr([0.9, 0.8, 0.7], 1.0, 0.5)},
         {"name": "plastic", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.3)},
         {"name": "matte", "pbrMetallicRoughness": pbr([0.5, 0.25, 1.0], 0.0, 0.7), "alphaMode": "BLEND",
-         "normalTexture": {"index": 0}},
+         "normalTexture": {"index": 0, "scale": 0.5}},
         {"name": "glass", "pbrMetallicRoughness": pbr([1.0, 1.0, 1.0], 0.0, 0.0),
          "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0}, "KHR_materials_ior": {"ior": 1.33}}},
         {"name": "lamp", "pbrMetallicRoughness": pbr([0.2, 0.2, 0.2], 0.0, 1.0), "emissiveFactor": [1.0, 0.5, 0.25],
@@ -480,6 +480,8 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     let texel =
         s.textures.get(normal.texture).sample(glam::Vec2::new(0.5, 0.5), photonmap::texture::Wrap::Repeat);
     assert!((texel.x - 188.0 / 255.0).abs() < 1e-6, "{texel}");
+    // Its scale multiplies the x and y of `2 c - 1` (glTF 2.0, 3.9.3).
+    assert_eq!(normal.factor, Vec3::new(0.5, 0.5, 1.0));
     assert_eq!((s.camera.width, s.camera.height), (256, 256));
 }
 

@@ -42,6 +42,7 @@ fn uv_tangents(scene: &Scene, tri: [u32; 3]) -> Option<(Vec3, Vec3)> {
 }
 
 /// The shading normal `ns` bent by a tangent-space normal map at `uv`: the map's `2 c - 1`
+/// (times `factor`: glTF's `scale` for x and y, 1 otherwise)
 /// in the frame of the triangle's `dp/du` (made perpendicular to `ns`), `dp/dv` and `ns`.
 /// `None` where the triangle's texture coordinates are degenerate or the result would face
 /// away from the face.
@@ -57,7 +58,8 @@ fn normal_mapped(
     let t = (dpdu - ns * ns.dot(dpdu)).try_normalize()?;
     // The bitangent keeps the handedness of the texture's (v up) frame.
     let b = ns.cross(t) * if ns.cross(t).dot(dpdv) < 0.0 { -1.0 } else { 1.0 };
-    let c = map.rgb(&scene.textures, uv) * 2.0 - Vec3::ONE;
+    let texel = scene.textures.get(map.texture).sample(uv * map.scale + map.offset, map.wrap).truncate();
+    let c = (texel * 2.0 - Vec3::ONE) * map.factor;
     let bent = (t * c.x + b * c.y + ns * c.z).try_normalize()?;
     (bent.dot(n) > 0.0).then_some(bent)
 }

@@ -185,7 +185,8 @@ pub struct MaterialMaps {
     pub ks: Option<TextureRef>,
     /// `norm`, or `map_Bump`/`bump` with a colour image: a tangent-space normal map (`+Z` out
     /// of the surface, `+X` along increasing `u`, `+Y` along increasing `v`; linear values
-    /// `2 c - 1`) that bends the shading normal.
+    /// `2 c - 1`, times `factor`: glTF's `normalTexture.scale` for x and y, 1 for z and for
+    /// MTL maps) that bends the shading normal.
     pub normal: Option<TextureRef>,
     /// A grey `map_Bump`/`bump` (or `bump_texture`): a height map whose slopes bend the shading
     /// normal (pbrt's and Mitsuba's bump mapping): the surface is displaced along its shading

@@ -190,20 +190,15 @@ pub fn material(
         None => None,
         Some(nt) => {
             let f = format!("{field}.normalTexture");
-            if nt.scale() != 1.0 {
-                warnings.say(
-                    format!("normal-scale {name}"),
-                    format!(
-                        "{f}.scale {} (material {name}) is not applied; the map is read as 1",
-                        nt.scale()
-                    ),
-                );
+            if !nt.scale().is_finite() {
+                return Err(at(path, format!("{f}.scale"), format!("{} is not a finite number", nt.scale())));
             }
             Some(images.reference_to(
                 &f,
                 nt.texture(),
                 nt.tex_coord(),
-                Vec3::ONE,
+                // The glTF scale of the map's x and y (see `MaterialMaps::normal`).
+                Vec3::new(nt.scale(), nt.scale(), 1.0),
                 Encoding::Data,
                 warnings,
             )?)
