@@ -218,9 +218,13 @@ fn cases() -> Vec<Case> {
             )
         },
         Case {
-            scene: "quad.gltf",
-            edits: &[("quad.gltf", "\"camera\": 0,", "")],
-            ..case("glTF without a camera", &["quad.gltf", "no perspective camera"])
+            // A glTF alone gets a camera made up; a scene file must have one or bring one.
+            edits: &[
+                ("quad.gltf", "\"camera\": 0,", ""),
+                ("cornell.toml", "[camera]\neye = [0.278, 0.273, -0.8]\ntarget = [0.278, 0.273, 0.0]\nup = [0.0, 1.0, 0.0]\nvfov_deg = 39.30764811610662  # full vertical field of view\nwidth = 256\nheight = 256\n", ""),
+                ("cornell.toml", "obj = \"cornell.obj\"", "gltf = \"quad.gltf\""),
+            ],
+            ..case("scene file and glTF without a camera", &["cornell.toml", "camera", "no perspective camera"])
         },
         Case {
             edits: &[("cornell.toml", "obj = \"cornell.obj\"", "obj = \"cornell.obj\"\ngltf = \"quad.gltf\"")],

@@ -561,3 +561,38 @@ fn sparse_accessors_and_u8_indices_are_read() {
     assert_eq!(s.mesh.indices, [[0, 1, 2]]);
     assert_eq!(s.material_names, ["(default grey)"]);
 }
+
+#[test]
+fn a_gltf_alone_without_camera_or_lights_is_framed_and_lit_by_a_white_sky() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/boxtextured/BoxTextured.gltf");
+    let s = Scene::load(&path).unwrap();
+    let warnings = s.warnings.join("\n");
+    assert!(warnings.contains("no perspective camera"), "{warnings}");
+    assert!(warnings.contains("white sky"), "{warnings}");
+    assert!(matches!(s.lights[..], [LightDesc::Environment { radiance: Vec3::ONE, map: None, .. }]));
+    // The whole box is in view: every corner of its bounds projects inside the image.
+    let (lo, hi) = (s.mesh.bounds().min, s.mesh.bounds().max);
+    let cam = &s.camera;
+    let (forward, right, up, half) = (cam.forward, cam.right, cam.up, cam.tan_half_fov);
+    for i in 0..8 {
+        let c = Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        );
+        let d = c - cam.eye;
+        let depth = d.dot(forward);
+        assert!(depth > 0.0);
+        assert!(
+            d.dot(right).abs() < half * depth && d.dot(up).abs() < half * depth,
+            "corner {c} out of view"
+        );
+    }
+    // The sky shows in the corners (exactly 1: nothing else is there) and the box in the middle.
+    let settings = RenderSettings { spp: Some(4), photons: Some(2000), seed: Some(1), ..Default::default() };
+    let film = render_checked(&s, &settings, 16).film;
+    let px = |x: usize, y: usize| film.pixels[y * film.width + x];
+    assert_eq!(px(0, 0), Vec3::ONE);
+    let centre = px(8, 8);
+    assert!(centre.max_element() < 0.95 && centre.min_element() > 0.05, "the box at the centre: {centre}");
+}

@@ -32,6 +32,19 @@ use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
+/// A camera for a scene that has none: 40° high, square, from the front (+Z, the way glTF
+/// models face), a little above and to the right of the centre of `bounds`, far enough back
+/// that the bounding sphere fits in the view.
+fn framing(bounds: &crate::geometry::Aabb) -> Option<Camera> {
+    let (centre, radius) = bounds.bounding_sphere();
+    let vfov = 40.0f32;
+    let radius = if radius > 0.0 { radius } else { 1.0 };
+    let distance = 1.05 * radius / (0.5 * vfov).to_radians().sin();
+    let eye = centre + distance * Vec3::new(0.45, 0.35, 1.0).normalize();
+    let side = gltf::CAMERA_HEIGHT;
+    Camera::look_at(eye, centre, Vec3::Y, vfov, side, side).filter(|_| eye.is_finite())
+}
+
 /// A loaded, validated scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -92,11 +105,17 @@ impl Scene {
             portals: Vec::new(),
             render: RenderSettings::default(),
         };
-        Scene::from_file(path, file)
+        Scene::build(path, file, true)
     }
 
     /// Builds the scene `file` describes; paths inside are relative to `path`'s directory.
     pub fn from_file(path: &Path, file: SceneFile) -> Result<Scene, SceneError> {
+        Scene::build(path, file, false)
+    }
+
+    /// [`Scene::from_file`]; for a glTF file given alone (`gltf_alone`), what it lacks is made
+    /// up and warned: a camera framing its bounds, and a white sky if nothing emits.
+    fn build(path: &Path, file: SceneFile, gltf_alone: bool) -> Result<Scene, SceneError> {
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
         }
@@ -153,6 +172,17 @@ impl Scene {
         let cameras = match (&file.camera, gltf_camera) {
             (Some(c), _) => cameras::cameras(path, c)?,
             (None, Some(view)) => vec![SceneCamera::still("camera", view)],
+            (None, None) if gltf_alone => {
+                warnings.push(
+                    "the glTF has no perspective camera: one frames its bounds from the front (+Z), above and to the right".into(),
+                );
+                vec![SceneCamera::still(
+                    "camera",
+                    framing(&mesh.bounds()).ok_or_else(|| {
+                        SceneError::file(path, "no camera, and its geometry has no finite bounds to frame")
+                    })?,
+                )]
+            }
             (None, None) => {
                 return Err(SceneError::field(
                     path,
@@ -167,6 +197,7 @@ impl Scene {
             .validate(mesh.positions.len())
             .map_err(|e| SceneError::file(path, format!("after transforms: {e}")))?;
         let resolved = materials::resolve(path, &tri_names, given, &file)?;
+        let resolved_emits = resolved.materials.iter().any(|m| m.emission().max_element() > 0.0);
         warnings.extend(resolved.warnings);
         // (A glTF's emissive texture is loaded for its mean only: no map uses it.)
         let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some() || m.bump.is_some());
@@ -178,6 +209,16 @@ impl Scene {
         let mut lights =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
         lights.extend(gltf_lights);
+        if gltf_alone && lights.is_empty() && !resolved_emits {
+            warnings.push(
+                "the glTF has no lights and nothing emits: it is lit by a white sky (radiance 1)".into(),
+            );
+            lights.push(LightDesc::Environment {
+                radiance: Vec3::ONE,
+                map: None,
+                to_world: glam::Mat3::IDENTITY,
+            });
+        }
         let portals =
             file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
         validate_render(path, &file.render, &cameras)?;
