@@ -68,11 +68,14 @@ pub enum Command {
 pub struct RenderArgs {
     /// Scene file (TOML).
     pub scene: PathBuf,
-    /// Output image, float RGB OpenEXR. For many images a pattern: {camera}, {frame} and
-    /// {frame:04} (zero-padded) are replaced, e.g. out/{camera}_{frame:04}.exr
+    /// Output image, its format from the extension: .exr (float RGB OpenEXR, with the record
+    /// --resume reads) or .png (8-bit sRGB, linear radiance clamped at 1). For many images a
+    /// pattern: {camera}, {frame} and {frame:04} (zero-padded) are replaced, e.g.
+    /// out/{camera}_{frame:04}.exr [default: the scene's name in the working directory, SCENE.exr,
+    /// or SCENE_{camera}_{frame:04}.exr with what tells many images apart]
     #[arg(short, long)]
-    pub output: PathBuf,
-    /// Also write an sRGB PNG preview here (linear radiance clamped at 1); a pattern like -o's
+    pub output: Option<PathBuf>,
+    /// Also write an sRGB PNG preview here (.png; linear radiance clamped at 1); a pattern like -o's
     #[arg(long)]
     pub png: Option<PathBuf>,
     /// Write a JSON report (stages, photons, rays, timings) here; for many images, one report

@@ -94,8 +94,22 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         None => None,
     };
     let selection = batch::plan::Selection { cameras: args.cameras.as_deref(), frames: frames.as_deref() };
-    let jobs = batch::plan::plan(&scene, selection, &args.output, args.png.as_deref())
-        .map_err(anyhow::Error::msg)?;
+    let output = match &args.output {
+        Some(o) => o.clone(),
+        None => batch::plan::default_output(&scene, selection).map_err(anyhow::Error::msg)?,
+    };
+    let jobs =
+        batch::plan::plan(&scene, selection, &output, args.png.as_deref()).map_err(anyhow::Error::msg)?;
+    if args.resume {
+        if let Some(j) =
+            jobs.iter().find(|j| batch::plan::Format::of(&j.output) != Ok(batch::plan::Format::Exr))
+        {
+            bail!(
+                "{}: --resume needs .exr outputs (a PNG holds no record of how it was made)",
+                j.output.display()
+            );
+        }
+    }
     let size = |c: usize| {
         let cam = &scene.cameras[c];
         (args.width.unwrap_or(cam.width), args.height.unwrap_or(cam.height))
@@ -110,7 +124,12 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         })
         .collect::<Result<Vec<_>>>()?;
     let outputs = jobs.iter().flat_map(|j| std::iter::once(&j.output).chain(&j.png));
-    check_output_dirs(outputs.chain(&args.stats))?;
+    if let Some(stats) = &args.stats {
+        if let Some(o) = outputs.clone().find(|o| same_file(o, stats)) {
+            bail!("{}: --stats names an image of the render too", o.display());
+        }
+    }
+    check_outputs(outputs.chain(&args.stats))?;
     let pool = pool(args.threads)?;
     let bars = progress::Bars::new(args.quiet);
     // One bar: over the images of a batch, or over the stages of one image.
@@ -210,13 +229,33 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
     Ok(if cancelled { Finished::Interrupted } else { Finished::Done })
 }
 
-/// Refuses output paths whose directory does not exist, before any work is done.
-fn check_output_dirs<'a>(paths: impl IntoIterator<Item = &'a PathBuf>) -> Result<()> {
+/// Whether two output paths name the same file (as written, or the same existing file).
+fn same_file(a: &Path, b: &Path) -> bool {
+    a == b || matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y)
+}
+
+/// Refuses, before any work is done, output paths that could not be written at the end: a
+/// directory that does not exist or where no file can be made (`/proc`, read-only), or a
+/// path that is a directory. Each directory is probed once, with a file made and removed.
+fn check_outputs<'a>(paths: impl IntoIterator<Item = &'a PathBuf>) -> Result<()> {
     let mut checked = std::collections::HashSet::new();
     for out in paths {
+        if out.is_dir() {
+            bail!("{}: is a directory, not an image file", out.display());
+        }
         let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        if checked.insert(dir.to_path_buf()) && !dir.is_dir() {
+        if !checked.insert(dir.to_path_buf()) {
+            continue;
+        }
+        if !dir.is_dir() {
             bail!("{}: the directory {} does not exist", out.display(), dir.display());
+        }
+        let probe = dir.join(format!(".photonmap-probe-{}", std::process::id()));
+        match std::fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+            Ok(_) => {
+                let _ = std::fs::remove_file(&probe);
+            }
+            Err(e) => bail!("{}: cannot write in {}: {e}", out.display(), dir.display()),
         }
     }
     Ok(())
@@ -319,7 +358,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0 && **b <= 1e6)) {
         bail!("--budgets: {b} is not a number of seconds in (0, 1e6]");
     }
-    check_output_dirs([args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten())?;
+    check_outputs([args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten())?;
     let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
     let peers = match &args.peers {
         Some(path) => {

@@ -173,6 +173,13 @@ fn cases() -> Vec<Case> {
         Case { flags: &[("--spp", "0")], ..case("--spp 0", &["cornell.toml", "spp"]) },
         Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
         Case { output: "missing/out.exr", ..case("output into a missing directory", &["missing"]) },
+        Case { output: "/proc/out.exr", ..case("output where no file can be made", &["/proc/out.exr", "cannot write in /proc"]) },
+        Case { output: "out.jpg", ..case("output of an unknown format", &["out.jpg", "`.jpg` is not an image format"]) },
+        Case { output: "out", ..case("output without an extension", &["out", "no extension"]) },
+        Case { flags: &[("--png", "out.exr")], ..case("--png on the -o image", &["out.exr", "--png names a PNG file"]) },
+        Case { flags: &[("--stats", "out.exr")], ..case("--stats on the -o image", &["out.exr", "--stats names an image"]) },
+        Case { flags: &[("--stats", "/proc/s.json")], ..case("--stats where no file can be made", &["/proc/s.json", "cannot write"]) },
+        Case { output: "out.png", flags: &[("--resume", "")], ..case("--resume with a PNG output", &["out.png", "--resume needs .exr"]) },
         // glTF: each error names the file and the JSON path at fault.
         Case {
             scene: "quad.gltf",
@@ -290,7 +297,10 @@ fn render(dir: &Path, case: &Case) -> Run {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_photonmap"));
     cmd.current_dir(dir).args(["render", case.scene, "-o", case.output, "--quiet"]);
     for (flag, value) in flags {
-        cmd.args([flag, value]);
+        cmd.arg(flag);
+        if !value.is_empty() {
+            cmd.arg(value); // "": a switch
+        }
     }
     cmd.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).env_remove("RUST_BACKTRACE");
     let start = Instant::now();

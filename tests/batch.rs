@@ -1,6 +1,7 @@
 //! Many images from one command (`render --frames`): a batch gives each image exactly what a
 //! render of that image alone gives, `--resume` skips the finished images and redoes a
-//! damaged one, and outputs that would overwrite each other are refused before any work.
+//! damaged one, and outputs that would overwrite each other are refused before any work. The
+//! output's format is its extension's, and a render without `-o` is named after its scene.
 
 use photonmap::film::Film;
 use std::fs;
@@ -60,9 +61,11 @@ ke = [17.0, 12.0, 4.0]
     path
 }
 
-/// Runs `photonmap render SCENE ARGS…` with small budgets; returns (success, stderr).
+/// Runs `photonmap render SCENE ARGS…` with small budgets, in the scene's directory; returns
+/// (success, stderr).
 fn render(scene: &Path, args: &[&str]) -> (bool, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_photonmap"))
+        .current_dir(scene.parent().unwrap())
         .arg("render")
         .arg(scene)
         .args(["--photons", "20000", "--spp", "4", "--threads", "2", "-q"])
@@ -152,4 +155,54 @@ fn outputs_that_would_overwrite_each_other_are_refused_before_any_work() {
     let (ok, err) = render(&scene, &["--cameras", "nope", "-o", dir.path().join("y.exr").to_str().unwrap()]);
     assert!(!ok);
     assert!(err.contains("orbit, still"), "{err}");
+}
+
+#[test]
+fn the_output_format_is_the_extensions() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(dir.path());
+    let d = dir.path();
+    let (ok, err) = render(&scene, &["--cameras", "still", "-o", "a.PNG"]);
+    assert!(ok, "{err}");
+    let (ok, err) = render(&scene, &["--cameras", "still", "-o", "b.exr", "--png", "c.png"]);
+    assert!(ok, "{err}");
+    let a = fs::read(d.join("a.PNG")).unwrap();
+    assert_eq!(&a[..8], b"\x89PNG\r\n\x1a\n");
+    // The same image as the preview beside an EXR, byte for byte.
+    assert_eq!(a, fs::read(d.join("c.png")).unwrap());
+    assert_eq!(&fs::read(d.join("b.exr")).unwrap()[..4], &[0x76, 0x2f, 0x31, 0x01]);
+}
+
+#[test]
+fn without_o_the_images_are_named_after_the_scene_in_the_working_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = scene(dir.path());
+    let listing = |d: &Path| {
+        let mut names: Vec<String> = fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".exr"))
+            .collect();
+        names.sort();
+        names
+    };
+    // One image: the scene's name.
+    let (ok, err) = render(&scene, &["--cameras", "still"]);
+    assert!(ok, "{err}");
+    assert_eq!(listing(dir.path()), ["turn.exr"]);
+    assert_eq!(pixels(&dir.path().join("turn.exr")).len(), 16 * 12 * 3);
+    // Many: what tells them apart is added, and nothing else.
+    fs::remove_file(dir.path().join("turn.exr")).unwrap();
+    let (ok, err) = render(&scene, &["--cameras", "orbit"]);
+    assert!(ok, "{err}");
+    assert_eq!(listing(dir.path()), ["turn_0000.exr", "turn_0001.exr", "turn_0002.exr"]);
+    for f in listing(dir.path()) {
+        fs::remove_file(dir.path().join(f)).unwrap();
+    }
+    let (ok, err) = render(&scene, &[]);
+    assert!(ok, "{err}");
+    assert_eq!(
+        listing(dir.path()),
+        ["turn_orbit_0000.exr", "turn_orbit_0001.exr", "turn_orbit_0002.exr", "turn_still_0000.exr"]
+    );
 }

@@ -14,6 +14,49 @@ pub struct Job {
     pub png: Option<PathBuf>,
 }
 
+/// The image formats an output may have, from its extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// Float RGB OpenEXR, with the record of how it was made.
+    Exr,
+    /// 8-bit sRGB PNG.
+    Png,
+}
+
+impl Format {
+    /// The format `path`'s extension names (case-insensitive), or a sentence saying it names
+    /// none this program writes.
+    pub fn of(path: &Path) -> Result<Format, String> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("exr") => Ok(Format::Exr),
+            Some("png") => Ok(Format::Png),
+            Some(other) => Err(format!(
+                "{}: `.{other}` is not an image format photonmap writes (.exr or .png)",
+                path.display()
+            )),
+            None => Err(format!("{}: no extension to tell the image format (.exr or .png)", path.display())),
+        }
+    }
+}
+
+/// The `-o` a render without one gets: the scene file's name in the working directory, with
+/// `{camera}` and `{frame:04}` where `selection` asks for more than one camera or frame.
+pub fn default_output(scene: &Scene, selection: Selection<'_>) -> Result<PathBuf, String> {
+    let stem = scene.path.file_stem().map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    let probe = plan(scene, selection, Path::new("{camera}/{frame}.exr"), None)?;
+    let cameras = probe.iter().map(|j| j.camera).collect::<std::collections::HashSet<_>>().len();
+    let many_frames = probe.iter().any(|j| probe.iter().any(|k| k.camera == j.camera && k.frame != j.frame));
+    let mut name = stem.replace('{', "(").replace('}', ")");
+    if cameras > 1 {
+        name += "_{camera}";
+    }
+    if many_frames {
+        name += "_{frame:04}";
+    }
+    Ok(PathBuf::from(name + ".exr"))
+}
+
 /// What the command line asks for.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct Selection<'a> {
@@ -62,6 +105,14 @@ pub fn plan(
             let output = expand(output, &cam.name, frame)?;
             let png = png.map(|p| expand(p, &cam.name, frame)).transpose()?;
             jobs.push(Job { camera: c, frame, output, png });
+        }
+    }
+    for job in &jobs {
+        Format::of(&job.output)?;
+        if let Some(png) = &job.png {
+            if Format::of(png)? != Format::Png {
+                return Err(format!("{}: --png names a PNG file (.png)", png.display()));
+            }
         }
     }
     check_distinct(&jobs)?;

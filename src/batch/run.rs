@@ -4,7 +4,7 @@
 //! images already finished skipped.
 
 use super::meta::{ImageMeta, FINISHED};
-use super::plan::Job;
+use super::plan::{Format, Job};
 use crate::config::RenderConfig;
 use crate::film::{Film, ImageError};
 use crate::frame::Progress;
@@ -94,7 +94,10 @@ pub fn run(
 
 /// Writes `job`'s image (and its PNG) with `meta` in the state `state`.
 fn write(job: &Job, film: &Film, meta: &ImageMeta, state: &str) -> Result<(), ImageError> {
-    film.write_exr_with(&job.output, &meta.attributes(state))?;
+    match Format::of(&job.output) {
+        Ok(Format::Png) => film.write_png(&job.output)?,
+        _ => film.write_exr_with(&job.output, &meta.attributes(state))?,
+    }
     if let Some(png) = &job.png {
         film.write_png(png)?;
     }
