@@ -15,6 +15,30 @@ pub struct Cli {
     pub command: Command,
 }
 
+/// The command line, parsed; every subcommand takes negative numbers as values (`--time -1`
+/// reaches the range check that names the flag instead of being read as a flag itself).
+pub fn parse() -> Cli {
+    use clap::{CommandFactory, FromArgMatches};
+    let command = Cli::command().mut_subcommands(|c| c.allow_negative_numbers(true));
+    let parsed = command.try_get_matches().and_then(|m| Cli::from_arg_matches(&m));
+    parsed.unwrap_or_else(|e| refuse(e))
+}
+
+/// Help and `--version` as clap prints them; a usage error as the one line every other error
+/// is (`photonmap: error: invalid value '-5' for '--width <WIDTH>': …`), exit code 2.
+fn refuse(e: clap::Error) -> ! {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+        || matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand)
+    {
+        e.exit()
+    }
+    let text = e.render().to_string();
+    let first: Vec<&str> = text.lines().take_while(|l| !l.trim().is_empty()).map(str::trim).collect();
+    eprintln!("photonmap: error: {}", first.join(" ").trim_start_matches("error: "));
+    std::process::exit(2)
+}
+
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render a scene to OpenEXR (and optionally a PNG preview).

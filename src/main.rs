@@ -5,11 +5,11 @@
 mod cli;
 mod progress;
 
-use anyhow::{bail, Context, Result};
-use clap::Parser;
-use cli::{Cli, Command};
+use anyhow::{anyhow, bail, Context, Result};
+use cli::Command;
 use photonmap::accel::AccelOptions;
 use photonmap::batch;
+use photonmap::config::{ConfigError, RenderSettings};
 use photonmap::frame::{Progress, Quiet};
 use photonmap::integrator;
 use photonmap::scene::Scene;
@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = cli::parse();
     let result = match cli.command {
         Command::Render(args) => match render(*args) {
             // Stopped by Ctrl-C after writing the image so far: the shell's code for SIGINT.
@@ -118,9 +118,9 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         .iter()
         .map(|job| {
             let (w, h) = size(job.camera);
-            settings
-                .resolve(w, h)
-                .with_context(|| format!("{}: invalid render settings", args.scene.display()))
+            let flags = args.settings.to_settings();
+            let size_flags = args.width.is_some() || args.height.is_some();
+            settings.resolve(w, h).map_err(|e| setting_error(e, &flags, size_flags, &args.scene))
         })
         .collect::<Result<Vec<_>>>()?;
     let outputs = jobs.iter().flat_map(|j| std::iter::once(&j.output).chain(&j.png));
@@ -227,6 +227,19 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         );
     }
     Ok(if cancelled { Finished::Interrupted } else { Finished::Done })
+}
+
+/// A setting that cannot be honoured, named where it was given: the flag when the command line
+/// set it (`--spp: 0 is not in …`), else the scene file's `[render]` field; the image size is
+/// the flags' when `size_flags`, else the camera's.
+fn setting_error(e: ConfigError, flags: &RenderSettings, size_flags: bool, scene: &Path) -> anyhow::Error {
+    let flag = |name: &str| format!("--{}", name.replace('_', "-"));
+    match e.field {
+        "width/height" if size_flags => anyhow!("--width/--height: {}", e.message),
+        "width/height" => anyhow!("{}: field `camera.width`/`camera.height`: {}", scene.display(), e.message),
+        field if flags.is_set(field) => anyhow!("{}: {}", flag(field), e.message),
+        field => anyhow!("{}: field `render.{field}`: {}", scene.display(), e.message),
+    }
 }
 
 /// Whether two output paths name the same file (as written, or the same existing file).
@@ -446,7 +459,7 @@ fn bench(args: cli::BenchArgs) -> Result<()> {
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let cfg = settings
         .resolve(args.width, args.height)
-        .with_context(|| format!("{}: invalid render settings", args.scene.display()))?;
+        .map_err(|e| setting_error(e, &args.settings.to_settings(), true, &args.scene))?;
     let all = std::thread::available_parallelism().map_or(1, |n| n.get());
     let threads = if !args.threads.is_empty() {
         args.threads.clone()

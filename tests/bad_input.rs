@@ -38,7 +38,7 @@ struct Case {
     scene: &'static str,
     /// Output passed to `-o`.
     output: &'static str,
-    /// Flags, overriding those of `QUICK` with the same name.
+    /// Flags, overriding those of `QUICK` with the same name (a value of `"!"` drops the flag).
     flags: &'static [(&'static str, &'static str)],
     /// Changes to the Cornell box files: (file, text to find, replacement).
     edits: &'static [(&'static str, &'static str, &'static str)],
@@ -161,16 +161,31 @@ fn cases() -> Vec<Case> {
             )],
             ..case("a singular matrix", &["cornell.toml", "field `mesh[0].matrix`", "singular"])
         },
-        Case { flags: &[("--width", "0")], ..case("--width 0", &["cornell.toml", "width"]) },
+        // A setting is named where it was given: the flag, or the scene file's field.
+        Case { flags: &[("--width", "0")], ..case("--width 0", &["--width/--height: 0x16"]) },
         Case {
             flags: &[("--width", "1000000")],
-            ..case("--width 1000000", &["cornell.toml", "width", "1000000", "GB"])
+            ..case("--width 1000000", &["--width/--height: 1000000x16", "GB"])
         },
+        Case { flags: &[("--width", "-5")], ..case("--width -5", &["'-5'", "--width"]) },
         Case {
             flags: &[("--photons", "1000000000000")],
-            ..case("--photons 10^12", &["cornell.toml", "photons", "1000000000000", "GB"])
+            ..case("--photons 10^12", &["--photons: 1000000000000", "GB"])
         },
-        Case { flags: &[("--spp", "0")], ..case("--spp 0", &["cornell.toml", "spp"]) },
+        Case { flags: &[("--photons", "-3")], ..case("--photons -3", &["'-3'", "--photons"]) },
+        Case { flags: &[("--spp", "0")], ..case("--spp 0", &["--spp: 0 is not in"]) },
+        Case { flags: &[("--time", "-1")], ..case("--time -1", &["--time: -1", "seconds"]) },
+        Case { flags: &[("--bogus", "")], ..case("an unknown flag", &["'--bogus'"]) },
+        Case {
+            flags: &[("--spp", "!")],
+            edits: &[("cornell.toml", "[[mesh]]", "[render]\nspp = 0\n\n[[mesh]]")],
+            ..case("spp = 0 in the scene file", &["cornell.toml", "field `render.spp`", "0 is not in"])
+        },
+        Case {
+            flags: &[("--width", "!"), ("--height", "!")],
+            edits: &[("cornell.toml", "width = 256", "width = 0")],
+            ..case("a camera of width 0", &["cornell.toml", "field `camera.width`", "0 is not in"])
+        },
         Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
         Case { output: "missing/out.exr", ..case("output into a missing directory", &["missing"]) },
         Case { output: "/proc/out.exr", ..case("output where no file can be made", &["/proc/out.exr", "cannot write in /proc"]) },
@@ -293,7 +308,7 @@ struct Run {
 fn render(dir: &Path, case: &Case) -> Run {
     let mut flags: Vec<(&str, &str)> =
         QUICK.iter().filter(|(f, _)| !case.flags.iter().any(|(g, _)| g == f)).copied().collect();
-    flags.extend_from_slice(case.flags);
+    flags.extend(case.flags.iter().filter(|(_, v)| *v != "!"));
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_photonmap"));
     cmd.current_dir(dir).args(["render", case.scene, "-o", case.output, "--quiet"]);
     for (flag, value) in flags {

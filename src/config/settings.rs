@@ -76,6 +76,14 @@ macro_rules! settings {
                 RenderSettings { $($field: over.$field.or(self.$field),)+ }
             }
 
+            /// Whether the setting `name` (a key of [`RenderSettings::FIELDS`]) is set.
+            pub fn is_set(&self, name: &str) -> bool {
+                match name {
+                    $(stringify!($field) => self.$field.is_some(),)+
+                    _ => false,
+                }
+            }
+
             /// Sets the setting `name` (a key of [`RenderSettings::FIELDS`]) from its text.
             pub fn set(&mut self, name: &str, text: &str) -> Result<(), String> {
                 match name {
