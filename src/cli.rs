@@ -9,10 +9,30 @@ use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
 #[derive(Parser, Debug)]
-#[command(name = "photonmap", version, about)]
+#[command(name = "photonmap", version = version_text(), about)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+}
+
+/// What `--version` prints after the name: the version, the ray casters this build has (the
+/// Embree version its bindings were made from, or "BVH only"), the features and the threads.
+fn version_text() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(|| {
+        #[cfg(feature = "embree")]
+        let (rays, features) = (
+            format!("Embree {} (the default) and the pure-Rust BVH", photonmap::accel::embree::version()),
+            "embree",
+        );
+        #[cfg(not(feature = "embree"))]
+        let (rays, features) = ("the pure-Rust BVH only (built without Embree)".to_string(), "none");
+        let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+        format!(
+            "{}\nrays:     {rays}\nfeatures: {features}\nthreads:  {threads} available here",
+            env!("CARGO_PKG_VERSION")
+        )
+    })
 }
 
 /// The command line, parsed; every subcommand takes negative numbers as values (`--time -1`
@@ -81,10 +101,14 @@ pub enum Command {
     /// of photons, gather queries and rays per second against the raw ray rate of the same
     /// accelerator measured in the same run.
     Bench(Box<BenchArgs>),
-    /// Print what a scene holds: triangles, materials, lights, bounds.
+    /// Print what a scene holds: geometry, bounds, cameras, textures, materials (with the
+    /// triangles using each), lights with their power, portals.
     Info {
-        /// Scene file (TOML).
+        /// Scene file (TOML, or a glTF).
         scene: PathBuf,
+        /// Print JSON instead of tables.
+        #[arg(long)]
+        json: bool,
     },
 }
 

@@ -95,8 +95,7 @@ impl Film {
     /// The text attributes of an OpenEXR file's header (those [`write_exr_with`](Film::write_exr_with)
     /// wrote, among others), without reading its pixels.
     pub fn read_exr_meta(path: &Path) -> Result<std::collections::BTreeMap<String, String>, ImageError> {
-        let meta = exr::meta::MetaData::read_from_file(path, false)
-            .map_err(|e| ImageError::Format { path: path.to_owned(), message: e.to_string() })?;
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
         let mut out = std::collections::BTreeMap::new();
         for header in &meta.headers {
             for (name, value) in header.shared_attributes.other.iter().chain(&header.own_attributes.other) {
@@ -134,8 +133,27 @@ impl Film {
                 film.pixels[pos.y() * w + pos.x()] = Vec3::new(r, g, b);
             },
         )
-        .map_err(|e| ImageError::Format { path: path.to_owned(), message: e.to_string() })?;
+        .map_err(|e| exr_error(path, e))?;
         Ok(image.layer_data.channel_data.pixels)
+    }
+}
+
+/// Why `path` could not be read as OpenEXR: the file system's error, "not an OpenEXR file" when
+/// it lacks the format's magic number (a PNG given to `compare`), else the decoder's message.
+fn exr_error(path: &Path, e: exr::error::Error) -> ImageError {
+    use std::io::Read;
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    let mut head = [0u8; 4];
+    let opened = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+    match (opened, e) {
+        (Err(source), _) if source.kind() != std::io::ErrorKind::UnexpectedEof => {
+            ImageError::Io { path: path.to_owned(), source }
+        }
+        (_, _) if head != MAGIC => {
+            ImageError::Format { path: path.to_owned(), message: "not an OpenEXR file".into() }
+        }
+        (_, exr::error::Error::Io(source)) => ImageError::Io { path: path.to_owned(), source },
+        (_, e) => ImageError::Format { path: path.to_owned(), message: format!("damaged OpenEXR file: {e}") },
     }
 }
 

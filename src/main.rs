@@ -3,10 +3,12 @@
 //! everything else is the library's.
 
 mod cli;
+mod out;
 mod progress;
 
 use anyhow::{anyhow, bail, Context, Result};
 use cli::Command;
+use out::outln;
 use photonmap::accel::AccelOptions;
 use photonmap::batch;
 use photonmap::config::{ConfigError, RenderSettings};
@@ -29,7 +31,7 @@ fn main() -> ExitCode {
             Err(e) => Err(e),
         },
         Command::Agree(args) => agree(args),
-        Command::Info { scene } => info(&scene),
+        Command::Info { scene, json } => info(&scene, json),
         Command::Stress(args) => stress(args),
         Command::Converge(args) => converge(args),
         Command::Bench(args) => bench(*args),
@@ -40,10 +42,27 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("photonmap: error: {e:#}");
+            eprintln!("photonmap: error: {}", message(&e));
             ExitCode::FAILURE
         }
     }
+}
+
+/// An error and its causes on one line, each cause said once: a cause whose text the message
+/// already holds (an error that prints its source, as `thiserror`'s `{source}` does) is not
+/// repeated (`x.exr: Is a directory`, not `x.exr: Is a directory: Is a directory`).
+fn message(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            if !text.is_empty() {
+                text.push_str(": ");
+            }
+            text.push_str(&cause);
+        }
+    }
+    text
 }
 
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
@@ -75,6 +94,7 @@ fn install_interrupt_handler(progressive: bool) -> Result<()> {
         if progressive && !STOP.swap(true, Ordering::SeqCst) {
             eprintln!("\nphotonmap: interrupted; finishing this pass to write the image so far (Ctrl-C again to quit without writing)");
         } else {
+            eprintln!("\nphotonmap: interrupted: nothing written");
             std::process::exit(130);
         }
     })
@@ -200,7 +220,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         let what = match &done[..] {
             [only] => {
                 let passes = first.map_or(0, |s| s.passes);
-                let passes = if passes > 1 { format!(", {passes} passes") } else { String::new() };
+                let passes = if passes > 1 { format!(" a pass, {passes} passes") } else { String::new() };
                 let skipped = if only.stats.is_none() { " already finished (--resume)" } else { "" };
                 format!(
                     "{}{skipped} ({}x{}, {} spp{passes})",
@@ -222,7 +242,8 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
             }
         };
         eprintln!(
-            "photonmap: {what} in {seconds:.2} s with {accel} on {threads} threads{}",
+            "photonmap: {what} in {seconds:.2} s with {accel} on {threads} thread{}{}",
+            if threads == 1 { "" } else { "s" },
             if cancelled { " (interrupted)" } else { "" }
         );
     }
@@ -279,9 +300,9 @@ fn agree(args: cli::AgreeArgs) -> Result<()> {
     let options = AccelOptions { robust: args.robust };
     let report = photonmap::tools::agree::agree_scene(&scene, args.rays, args.seed, options)?;
     if args.json {
-        println!("{}", serde_json::to_string(&report)?);
+        outln!("{}", serde_json::to_string(&report)?);
     } else {
-        println!("{report}");
+        outln!("{report}");
     }
     Ok(())
 }
@@ -331,9 +352,9 @@ fn compare(
     if json {
         let v = serde_json::json!({"rmse": rmse, "rel_mse": rel_mse, "mean": ma, "reference_mean": mb,
             "bias": ma / mb - 1.0, "nonfinite_pixels": nonfinite});
-        println!("{v}");
+        outln!("{v}");
     } else {
-        println!("rmse {rmse:.5}  rel_mse {rel_mse:.5}  mean {ma:.5} vs {mb:.5} ({:+.2}%)  non-finite pixels {nonfinite}", 100.0 * (ma / mb - 1.0));
+        outln!("rmse {rmse:.5}  rel_mse {rel_mse:.5}  mean {ma:.5} vs {mb:.5} ({:+.2}%)  non-finite pixels {nonfinite}", 100.0 * (ma / mb - 1.0));
     }
     Ok(())
 }
@@ -389,20 +410,20 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
         overrides: photonmap::config::RenderSettings { accel: args.accel, ..Default::default() },
     };
     let pool = pool(args.threads)?;
-    println!("{}", converge::TABLE_HEADER);
-    let points = pool
-        .install(|| converge::run(&scene, &reference, &study, |p| println!("{}", converge::table_row(p))))?;
-    println!();
+    outln!("{}", converge::TABLE_HEADER);
+    let points =
+        pool.install(|| converge::run(&scene, &reference, &study, |p| outln!("{}", converge::table_row(p))))?;
+    outln!();
     for &m in &study.methods {
         if let Some(s) = converge::slope(&points, m) {
-            println!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
+            outln!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
         }
     }
     if !peers.is_empty() {
-        println!("\nequal time: the lowest error of any method here within each peer's time");
-        println!("{}", converge::RACE_HEADER);
+        outln!("\nequal time: the lowest error of any method here within each peer's time");
+        outln!("{}", converge::RACE_HEADER);
         for r in converge::race(&points, &peers) {
-            println!("{}", converge::race_row(&r));
+            outln!("{}", converge::race_row(&r));
         }
     }
     if let Some(path) = &args.csv {
@@ -431,21 +452,21 @@ fn stress(args: cli::StressArgs) -> Result<()> {
         }
     }
     if !args.json {
-        println!("{}", stress::table_header());
+        outln!("{}", stress::table_header());
     }
     let wall = Instant::now();
     let rows = pool(args.threads)?.install(|| {
         stress::run(filter, &opts, |row| {
             if args.json {
-                println!("{}", serde_json::to_string(row).unwrap_or_default());
+                outln!("{}", serde_json::to_string(row).unwrap_or_default());
             } else {
-                println!("{}", stress::table_row(row));
+                outln!("{}", stress::table_row(row));
             }
         })
     });
     let failed = rows.iter().filter(|r| !r.pass).count();
     if !args.json {
-        println!("{} checks, {failed} failed, {:.1} s", rows.len(), wall.elapsed().as_secs_f64());
+        outln!("{} checks, {failed} failed, {:.1} s", rows.len(), wall.elapsed().as_secs_f64());
     }
     if failed > 0 {
         bail!("{failed} of {} stress checks failed", rows.len());
@@ -471,80 +492,22 @@ fn bench(args: cli::BenchArgs) -> Result<()> {
     let spec = BenchSpec { runs: args.runs, threads, raw_rays_per_kind: args.raw_rays };
     let name = args.scene.display().to_string();
     let report = bench::run(&scene, &name, &cfg, &spec, |t, run, s| {
-        eprintln!("photonmap bench: {t} threads, run {}: {s:.3} s", run + 1)
+        eprintln!("photonmap bench: {t} thread{}, run {}: {s:.3} s", if t == 1 { "" } else { "s" }, run + 1)
     })?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else {
-        print!("{report}");
+        outln!("{}", report.to_string().trim_end());
     }
     Ok(())
 }
 
-fn info(path: &std::path::Path) -> Result<()> {
-    let scene = load_scene(path)?;
-    let b = scene.bounds();
-    println!("scene      {}", path.display());
-    println!("triangles  {}", scene.mesh.len());
-    println!("vertices   {}", scene.mesh.positions.len());
-    let a = &scene.attributes;
-    let smooth =
-        if a.has_normals() { a.normals.iter().filter(|n| **n != glam::Vec3::ZERO).count() } else { 0 };
-    println!(
-        "shading    {smooth} vertices with normals, {}",
-        if a.has_uvs() { "texture coordinates" } else { "no texture coordinates" }
-    );
-    for t in &scene.textures.list {
-        println!("texture    {} ({}x{}, {} KB)", t.path.display(), t.width(), t.height(), t.bytes() / 1024);
-    }
-    println!("bounds     {:?} .. {:?}", b.min.to_array(), b.max.to_array());
-    let lens = scene.camera.lens;
-    let lens = if lens.is_pinhole() {
-        "pinhole".to_string()
+fn info(path: &std::path::Path, json: bool) -> Result<()> {
+    let info = photonmap::tools::info::SceneInfo::of(&load_scene(path)?);
+    if json {
+        outln!("{}", serde_json::to_string_pretty(&info)?);
     } else {
-        format!(
-            "thin lens: aperture radius {} m, focus distance {} m",
-            lens.aperture_radius, lens.focus_distance
-        )
-    };
-    println!(
-        "camera     {}x{}, eye {:?}, {lens}",
-        scene.camera.width,
-        scene.camera.height,
-        scene.camera.eye.to_array()
-    );
-    let cameras: Vec<String> = scene
-        .cameras
-        .iter()
-        .map(|c| {
-            let frames = c.frames().map_or("still".into(), |f| format!("frames {}..={}", f.start(), f.end()));
-            format!("{} ({}x{}, {frames})", c.name, c.width, c.height)
-        })
-        .collect();
-    println!("cameras    {}", cameras.join(", "));
-    let count = scene.triangles_per_material();
-    for (((name, m), maps), count) in
-        scene.material_names.iter().zip(&scene.materials).zip(&scene.maps).zip(count)
-    {
-        let texture = |what: &str, t: Option<photonmap::scene::TextureRef>| {
-            t.map(|t| format!(", {what} from {}", scene.textures.get(t.texture).path.display()))
-                .unwrap_or_default()
-        };
-        let maps = texture("kd", maps.kd) + &texture("ks", maps.ks) + &texture("normals", maps.normal);
-        println!("material   {name}: {m:?} ({count} triangles{maps})");
-    }
-    for l in &scene.lights {
-        println!("light      {l:?}");
-    }
-    for p in &scene.portals {
-        let c = |v: glam::Vec3| v.to_array();
-        println!(
-            "portal     corner {:?}, edges {:?} {:?} ({:.4} m^2)",
-            c(p.corner),
-            c(p.edge_u),
-            c(p.edge_v),
-            p.edge_u.cross(p.edge_v).length()
-        );
+        outln!("{}", info.to_string().trim_end());
     }
     Ok(())
 }

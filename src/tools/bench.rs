@@ -181,6 +181,8 @@ pub struct BenchReport {
     pub height: u32,
     pub integrator: String,
     pub photons: u64,
+    /// Caustic photons traced by a run (per channel with per-channel maps): 0 when the scene
+    /// has no specular surface for them and the pass was skipped, whatever the budget.
     pub caustic_photons: u64,
     pub spp: u32,
     /// Peak resident memory of the process over all runs (Linux `VmHWM`; 0 where unknown).
@@ -317,7 +319,14 @@ pub fn run(
         height: cfg.height,
         integrator: cfg.integrator.kind().name().to_string(),
         photons: cfg.integrator.photon_passes().map_or(0, |p| p.photons),
-        caustic_photons: cfg.integrator.photon_passes().map_or(0, |p| p.caustic_photons),
+        caustic_photons: runs[0][0]
+            .1
+            .photons
+            .iter()
+            .filter(|(name, _)| *name == "caustic" || name.starts_with("caustic."))
+            .map(|(_, m)| m.emitted)
+            .max()
+            .unwrap_or(0),
         spp: cfg.spp,
         peak_memory_bytes: crate::stats::peak_memory_bytes().unwrap_or(0),
         load_average: [load_before, load_average()],
@@ -328,18 +337,23 @@ pub fn run(
 impl fmt::Display for BenchReport {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let runs = self.rows.first().map_or(0, |r| r.runs);
+        let plural = |n: u64, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let caustic = match self.caustic_photons {
+            0 => "no caustic pass".to_string(),
+            n => plural(n, "caustic photon", "caustic photons"),
+        };
         writeln!(
             f,
-            "{}: {} triangles, {}x{}, {} integrator, {} photons, {} caustic photons, {} spp, {}; medians of {runs} runs",
+            "{}: {}, {}x{}, {} integrator, {}, {caustic}, {} spp, {}; {}",
             self.scene,
-            self.triangles,
+            plural(self.triangles as u64, "triangle", "triangles"),
             self.width,
             self.height,
             self.integrator,
-            self.photons,
-            self.caustic_photons,
+            plural(self.photons, "photon", "photons"),
             self.spp,
-            self.accel
+            self.accel,
+            if runs == 1 { "one run each".to_string() } else { format!("medians of {runs} runs") }
         )?;
         write!(f, "{:<34}", "")?;
         for r in &self.rows {

@@ -6,6 +6,7 @@
 pub mod agree;
 pub mod bench;
 pub mod converge;
+pub mod info;
 pub mod montecarlo;
 pub mod plot;
 pub mod stress;

@@ -1,0 +1,189 @@
+//! What the `photonmap` binary prints, run as a user runs it: `info` as a table and as JSON,
+//! `--version`, the summaries' wording, a closed pipe, Ctrl-C during a single-pass render, and
+//! errors said once (each case one that a new user met).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn photonmap() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_photonmap"));
+    c.env_remove("RUST_BACKTRACE").stdin(Stdio::null());
+    c
+}
+
+fn scene(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
+}
+
+fn run(args: &[&str]) -> Output {
+    photonmap().args(args).output().expect("photonmap runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn info_prints_a_readable_table() {
+    let out = run(&["info", scene("cornell/cornell.toml").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let t = text(&out.stdout);
+    assert!(!t.contains('{') && !t.contains("Vec3"), "Rust debug output: {t}");
+    assert!(t.contains("36 triangles"), "{t}");
+    let row = t.lines().find(|l| l.contains("white")).expect("a row for the white material");
+    let cells: Vec<&str> = row.split_whitespace().collect();
+    assert_eq!(cells[..4], ["white", "diffuse", "30", "kd"], "{row}");
+    let light = t.lines().find(|l| l.trim_start().starts_with("area")).expect("the area light's row");
+    assert!(light.contains("triangles 2"), "{light}");
+}
+
+#[test]
+fn info_json_holds_the_same_scene() {
+    let out = run(&["info", "--json", scene("cornell/cornell.toml").to_str().unwrap()]);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("info --json prints JSON");
+    assert_eq!(v["triangles"], 36);
+    let white = v["materials"].as_array().unwrap().iter().find(|m| m["name"] == "white").unwrap();
+    assert_eq!(white["type"], "diffuse");
+    assert_eq!(white["triangles"], 30);
+    assert_eq!(white["parameters"]["kd"].as_array().unwrap().len(), 3);
+    let lights = v["lights"].as_array().unwrap();
+    assert_eq!(lights.len(), 1);
+    assert_eq!(lights[0]["type"], "area");
+    // π ke A: ke = 17 on the 0.13 × 0.105 m ceiling light.
+    let power = lights[0]["power"][0].as_f64().unwrap();
+    let expected = std::f64::consts::PI * 17.0 * 0.13 * 0.105;
+    assert!((power / expected - 1.0).abs() < 0.01, "{power} W, expected {expected}");
+}
+
+#[test]
+fn version_names_the_ray_caster() {
+    let out = run(&["--version"]);
+    assert!(out.status.success());
+    let t = text(&out.stdout);
+    assert!(t.starts_with(&format!("photonmap {}", env!("CARGO_PKG_VERSION"))), "{t}");
+    #[cfg(feature = "embree")]
+    let expected = format!("Embree {}", photonmap::accel::embree::version());
+    #[cfg(not(feature = "embree"))]
+    let expected = "BVH only".to_string();
+    assert!(t.contains(&expected), "{t}");
+}
+
+/// A reader that goes away ends the program quietly: the shell's code for SIGPIPE, no panic.
+#[test]
+fn a_closed_pipe_ends_info_quietly() {
+    // The bunny takes far longer to load than the pipe takes to be closed below.
+    let mut child = photonmap()
+        .args(["info", scene("bunny/bunny.toml").to_str().unwrap()])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = text(&out.stderr);
+    assert!(!err.contains("panicked") && !err.contains("Broken pipe"), "{err}");
+    assert_eq!(out.status.code(), Some(141), "{err}");
+}
+
+/// Whether process `pid` has a handler for SIGINT (Linux: bit 2 of `SigCgt`).
+fn catches_sigint(pid: u32) -> bool {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    let mask = status.lines().find_map(|l| l.strip_prefix("SigCgt:")).map(str::trim).unwrap_or("0");
+    u64::from_str_radix(mask, 16).is_ok_and(|m| m & 0b10 != 0)
+}
+
+/// Ctrl-C during a single-pass render quits at once and says so; no image is left.
+#[test]
+fn ctrl_c_during_a_single_pass_render_says_nothing_was_written() {
+    if !Path::new("/proc/self/status").exists() {
+        return; // the handler cannot be seen installed without Linux's /proc
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("out.exr");
+    let mut child = photonmap()
+        .args(["render", scene("cornell/cornell.toml").to_str().unwrap(), "-o"])
+        .arg(&output)
+        .args(["--photons", "50000000", "--width", "16", "--height", "16"])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !catches_sigint(child.id()) {
+        assert!(start.elapsed() < Duration::from_secs(60), "the Ctrl-C handler was never installed");
+        assert!(child.try_wait().unwrap().is_none(), "the render ended before it could be interrupted");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let kill = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let err = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted: nothing written"), "{err}");
+    assert!(!output.exists(), "an image was written");
+}
+
+#[test]
+fn compare_says_when_a_file_is_not_openexr() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("x.png");
+    std::fs::write(&png, b"\x89PNG\r\n\x1a\n not really").unwrap();
+    let out = run(&["compare", png.to_str().unwrap(), "--exact", "1"]);
+    assert!(!out.status.success());
+    let err = text(&out.stderr);
+    assert!(err.contains("x.png: not an OpenEXR file"), "{err}");
+}
+
+#[test]
+fn a_cause_is_said_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = run(&["compare", dir.path().to_str().unwrap(), "--exact", "1"]);
+    let err = text(&out.stderr);
+    assert_eq!(err.matches("Is a directory").count(), 1, "{err}");
+    let out = run(&["compare", dir.path().join("nosuch.exr").to_str().unwrap(), "--exact", "1"]);
+    let err = text(&out.stderr);
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+}
+
+#[test]
+fn summaries_count_in_words_that_agree() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = photonmap()
+        .current_dir(dir.path())
+        .args(["render", scene("cornell/cornell.toml").to_str().unwrap(), "-o", "c.exr"])
+        .args(["--width", "8", "--height", "8", "--spp", "1", "--photons", "2000", "--threads", "1"])
+        .args(["--integrator", "sppm", "--passes", "2"])
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("on 1 thread\n") || err.ends_with("on 1 thread"), "{err}");
+    assert!(err.contains("1 spp a pass, 2 passes"), "{err}");
+
+    let out = run(&[
+        "bench",
+        scene("cornell/cornell.toml").to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--runs",
+        "1",
+        "--threads",
+        "1",
+        "--photons",
+        "2000",
+        "--spp",
+        "1",
+        "--raw-rays",
+        "1000",
+    ]);
+    let t = text(&out.stdout);
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    // The Cornell box has no mirror or glass: no caustic photons are traced, whatever the budget.
+    assert!(t.contains("no caustic pass"), "{t}");
+    assert!(t.contains("one run each") && !t.contains("1 runs"), "{t}");
+    assert!(t.contains(" 1 thread") && !t.contains("1 threads"), "{t}");
+}
