@@ -5,6 +5,7 @@ use clap::{Args, Parser, Subcommand};
 use photonmap::accel::AccelKind;
 use photonmap::choice::Choice;
 use photonmap::config::RenderSettings;
+use photonmap::film::ToneCurve;
 use std::path::PathBuf;
 
 /// A photon-mapping renderer: Jensen's two-pass method with Embree or a pure-Rust BVH.
@@ -123,9 +124,18 @@ pub struct RenderArgs {
     /// or SCENE_{camera}_{frame:04}.exr with what tells many images apart]
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Also write an sRGB PNG preview here (.png; linear radiance clamped at 1); a pattern like -o's
+    /// Also write an 8-bit sRGB PNG preview here (.png; --exposure and --tonemap say how the
+    /// radiance is shown); a pattern like -o's
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// Exposure of PNG outputs in stops: +1 doubles the radiance before the tone curve (the
+    /// EXR stays linear)
+    #[arg(long, value_name = "EV", default_value_t = 0.0, value_parser = exposure)]
+    pub exposure: f32,
+    /// Tone curve of PNG outputs: clamp (radiance above 1 is white), filmic (Hable) or aces
+    /// (Narkowicz's fit), the latter two keeping highlights from clipping
+    #[arg(long, value_name = "CURVE", default_value = "clamp", value_parser = choice::<ToneCurve>())]
+    pub tonemap: ToneCurve,
     /// Write a JSON report (stages, photons, rays, timings) here; for many images, one report
     /// with the batch's totals and every image's own
     #[arg(long)]
@@ -227,6 +237,16 @@ impl clap::Args for SettingsArgs {
 
     fn augment_args_for_update(cmd: clap::Command) -> clap::Command {
         Self::augment_args(cmd)
+    }
+}
+
+/// An exposure in stops: finite, within ±64 (beyond, every pixel is black or white).
+fn exposure(text: &str) -> Result<f32, String> {
+    let ev: f32 = text.parse().map_err(|_| format!("`{text}` is not a number of stops"))?;
+    if ev.is_finite() && ev.abs() <= 64.0 {
+        Ok(ev)
+    } else {
+        Err(format!("{text} is not a finite number of stops in -64..=64"))
     }
 }
 

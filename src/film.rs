@@ -1,7 +1,7 @@
 //! The film: a float RGB image of mean radiance per pixel, written as OpenEXR (float32 R, G, B,
-//! row 0 at the top) and as an sRGB PNG preview (linear radiance clamped at 1, then the sRGB curve). Files are written atomically: to a
-//! temporary file beside the target, then renamed over it, so an existing image is only ever
-//! replaced by a complete new one.
+//! row 0 at the top) and as an 8-bit sRGB PNG preview ([`Tonemap`]: an exposure, a tone curve,
+//! then the sRGB transfer curve). Files are written atomically: to a temporary file beside the
+//! target, then renamed over it, so an existing image is only ever replaced by a complete new one.
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};
@@ -110,7 +110,13 @@ impl Film {
     /// Writes an 8-bit sRGB PNG preview (radiance clamped to [0, 1], sRGB transfer curve)
     /// atomically.
     pub fn write_png(&self, path: &Path) -> Result<(), ImageError> {
-        let bytes: Vec<u8> = self.pixels.iter().flat_map(|p| p.to_array().map(srgb8)).collect();
+        self.write_png_with(path, Tonemap::default())
+    }
+
+    /// Writes an 8-bit sRGB PNG preview of the radiance mapped by `tonemap`, atomically.
+    pub fn write_png_with(&self, path: &Path, tonemap: Tonemap) -> Result<(), ImageError> {
+        let bytes: Vec<u8> =
+            self.pixels.iter().flat_map(|p| tonemap.apply(*p).to_array().map(srgb8)).collect();
         atomic_write(path, |tmp| {
             let file = std::fs::File::create(tmp).map_err(|e| e.to_string())?;
             let mut enc =
@@ -154,6 +160,66 @@ fn exr_error(path: &Path, e: exr::error::Error) -> ImageError {
         }
         (_, exr::error::Error::Io(source)) => ImageError::Io { path: path.to_owned(), source },
         (_, e) => ImageError::Format { path: path.to_owned(), message: format!("damaged OpenEXR file: {e}") },
+    }
+}
+
+crate::choice! {
+    /// How a preview maps scene radiance (after the exposure) to display values in [0, 1].
+    pub enum ToneCurve {
+        /// Clamped at 1: exact below 1, every brighter value white.
+        Clamp = "clamp",
+        /// John Hable's filmic curve (Uncharted 2), white at 11.2, with his exposure bias of 2:
+        /// a toe for the shadows and a long shoulder that keeps highlights from clipping.
+        Filmic = "filmic",
+        /// Krzysztof Narkowicz's fit of the ACES reference and output transforms (input × 0.6):
+        /// more contrast than filmic, white reached at about 16.
+        Aces = "aces",
+    }
+}
+
+/// What an 8-bit preview shows of the linear radiance: `2^exposure` times it, through `curve`.
+/// The EXR is always the linear radiance itself.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tonemap {
+    /// Exposure in stops (EV): +1 doubles the radiance before the curve.
+    pub exposure: f32,
+    pub curve: ToneCurve,
+}
+
+impl Default for Tonemap {
+    fn default() -> Self {
+        Tonemap { exposure: 0.0, curve: ToneCurve::Clamp }
+    }
+}
+
+impl Tonemap {
+    /// The display value (linear, in [0, 1]) of radiance `v`; non-finite channels give 0.
+    pub fn apply(&self, v: Vec3) -> Vec3 {
+        let scale = self.exposure.exp2();
+        let curve = |x: f32| -> f32 {
+            let x = if x.is_finite() { (x * scale).max(0.0) } else { 0.0 };
+            match self.curve {
+                ToneCurve::Clamp => x.min(1.0),
+                ToneCurve::Filmic => {
+                    let f = |x: f32| {
+                        let (a, b, c, d, e, f) = (0.15, 0.50, 0.10, 0.20, 0.02, 0.30);
+                        (x * (a * x + c * b) + d * e) / (x * (a * x + b) + d * f) - e / f
+                    };
+                    // f(0) is 0 but rounds to 1e-8: black stays black.
+                    if x == 0.0 {
+                        0.0
+                    } else {
+                        (f(2.0 * x) / f(11.2)).clamp(0.0, 1.0)
+                    }
+                }
+                ToneCurve::Aces => {
+                    let x = 0.6 * x;
+                    let (a, b, c, d, e) = (2.51, 0.03, 2.43, 0.59, 0.14);
+                    ((x * (a * x + b)) / (x * (c * x + d) + e)).clamp(0.0, 1.0)
+                }
+            }
+        };
+        Vec3::new(curve(v.x), curve(v.y), curve(v.z))
     }
 }
 
@@ -205,6 +271,32 @@ pub fn compare(a: &Film, b: &Film) -> Option<(f64, f64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tone_curves_are_monotone_bounded_and_exposure_is_in_stops() {
+        for curve in [ToneCurve::Clamp, ToneCurve::Filmic, ToneCurve::Aces] {
+            let t = Tonemap { exposure: 0.0, curve };
+            let mut last = -1.0;
+            for i in 0..=2000 {
+                let x = i as f32 * 0.01;
+                let y = t.apply(Vec3::splat(x)).x;
+                assert!((0.0..=1.0).contains(&y) && y >= last, "{curve:?} at {x}: {y} after {last}");
+                last = y;
+            }
+            assert_eq!(t.apply(Vec3::ZERO), Vec3::ZERO, "{curve:?}");
+            assert_eq!(t.apply(Vec3::new(f32::NAN, f32::INFINITY, -1.0)), Vec3::ZERO, "{curve:?}");
+            let up = Tonemap { exposure: 1.0, curve };
+            assert_eq!(up.apply(Vec3::splat(0.1)), t.apply(Vec3::splat(0.2)), "{curve:?}");
+        }
+        // The filmic and ACES curves keep highlights apart that clamping makes white.
+        for curve in [ToneCurve::Filmic, ToneCurve::Aces] {
+            let t = Tonemap { exposure: 0.0, curve };
+            assert!(t.apply(Vec3::splat(4.0)).x < t.apply(Vec3::splat(8.0)).x - 0.02, "{curve:?}");
+            assert!(t.apply(Vec3::splat(0.18)).x > 0.05, "{curve:?} crushes mid-grey");
+        }
+        let clamp = Tonemap::default();
+        assert_eq!(clamp.apply(Vec3::new(0.5, 2.0, 0.25)), Vec3::new(0.5, 1.0, 0.25));
+    }
 
     #[test]
     fn exr_round_trip_is_exact_and_atomic() {

@@ -164,6 +164,7 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         cancel: Some(&STOP),
         checkpoint_every: args.checkpoint_every,
         started: wall,
+        preview: photonmap::film::Tonemap { exposure: args.exposure, curve: args.tonemap },
     };
     let load = stats.stages.clone();
     let (mut done, raw) = pool.install(|| -> Result<_> {

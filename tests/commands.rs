@@ -187,3 +187,44 @@ fn summaries_count_in_words_that_agree() {
     assert!(t.contains("one run each") && !t.contains("1 runs"), "{t}");
     assert!(t.contains(" 1 thread") && !t.contains("1 threads"), "{t}");
 }
+
+/// Reads an 8-bit RGB PNG's bytes.
+fn png_bytes(path: &Path) -> Vec<u8> {
+    let decoder = png::Decoder::new(std::fs::File::open(path).unwrap());
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// `--exposure` and `--tonemap` change the PNG preview, never the EXR.
+#[test]
+fn exposure_and_tone_curve_shape_the_png_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let render = |name: &str, flags: &[&str]| {
+        let out = photonmap()
+            .current_dir(dir.path())
+            .args(["render", scene("sunroom/sunroom.toml").to_str().unwrap()])
+            .args(["-o", &format!("{name}.exr"), "--png", &format!("{name}.png"), "--quiet"])
+            .args(["--width", "24", "--height", "24", "--spp", "2", "--photons", "20000", "--threads", "2"])
+            .args(flags)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", text(&out.stderr));
+        let exr = photonmap::film::Film::read_exr(&dir.path().join(format!("{name}.exr"))).unwrap();
+        (exr, png_bytes(&dir.path().join(format!("{name}.png"))))
+    };
+    let mean = |b: &[u8]| b.iter().map(|&v| v as f64).sum::<f64>() / b.len() as f64;
+    let white = |b: &[u8]| b.iter().filter(|&&v| v == 255).count();
+    let (exr, plain) = render("plain", &[]);
+    let (exr_dark, dark) = render("dark", &["--exposure", "-2"]);
+    let (exr_aces, aces) = render("aces", &["--exposure", "6", "--tonemap", "aces"]);
+    let (_, bright) = render("bright", &["--exposure", "6"]);
+    assert!(exr == exr_dark, "--exposure changed the EXR");
+    assert!(exr == exr_aces, "--tonemap changed the EXR");
+    assert!(mean(&dark) < 0.8 * mean(&plain), "{} vs {}", mean(&dark), mean(&plain));
+    // Six stops up the room clips when clamped; the ACES curve keeps most of it below white.
+    assert!(white(&bright) > white(&plain) + 100, "{} white bytes vs {}", white(&bright), white(&plain));
+    assert!(white(&aces) < white(&bright) / 2, "{} white bytes vs {}", white(&aces), white(&bright));
+}

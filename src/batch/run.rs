@@ -6,7 +6,7 @@
 use super::meta::{ImageMeta, FINISHED};
 use super::plan::{Format, Job};
 use crate::config::RenderConfig;
-use crate::film::{Film, ImageError};
+use crate::film::{Film, ImageError, Tonemap};
 use crate::frame::Progress;
 use crate::integrator::{Checkpoint, Control, Prepared};
 use crate::scene::{Camera, Scene};
@@ -28,6 +28,8 @@ pub struct Options<'a> {
     /// The command's start: the first image's time budget counts from it, each later one's
     /// from its own start.
     pub started: Instant,
+    /// How PNG outputs and previews show the radiance (the EXRs hold it linear).
+    pub preview: Tonemap,
 }
 
 /// What became of one image of the batch.
@@ -58,14 +60,14 @@ pub fn run(
     for (i, (job, cfg)) in jobs.iter().zip(cfgs).enumerate() {
         let view = super::plan::view_index(scene, job);
         let meta = ImageMeta::new(scene, cfg, &scene.cameras[job.camera].name, job.frame, &views[view]);
-        if options.resume && finished(job, &meta)? {
+        if options.resume && finished(job, &meta, options.preview)? {
             done.push(Done { job: job.clone(), stats: None });
             outer.advance(1);
             continue;
         }
         let checkpoint = |passes: u32, film: &Film| {
             let state = format!("checkpoint after {passes} passes");
-            if let Err(e) = write(job, film, &meta, &state) {
+            if let Err(e) = write(job, film, &meta, &state, options.preview) {
                 eprintln!("photonmap: warning: checkpoint after {passes} passes not written: {e}");
             }
         };
@@ -80,7 +82,7 @@ pub fn run(
         } else {
             FINISHED.to_string()
         };
-        write(job, &output.film, &meta, &state)?;
+        write(job, &output.film, &meta, &state, options.preview)?;
         let cancelled = output.stats.cancelled;
         done.push(Done { job: job.clone(), stats: Some(output.stats) });
         outer.advance(1);
@@ -92,28 +94,28 @@ pub fn run(
     Ok(done)
 }
 
-/// Writes `job`'s image (and its PNG) with `meta` in the state `state`.
-fn write(job: &Job, film: &Film, meta: &ImageMeta, state: &str) -> Result<(), ImageError> {
+/// Writes `job`'s image (and its PNG, mapped by `preview`) with `meta` in the state `state`.
+fn write(job: &Job, film: &Film, meta: &ImageMeta, state: &str, preview: Tonemap) -> Result<(), ImageError> {
     match Format::of(&job.output) {
-        Ok(Format::Png) => film.write_png(&job.output)?,
+        Ok(Format::Png) => film.write_png_with(&job.output, preview)?,
         _ => film.write_exr_with(&job.output, &meta.attributes(state))?,
     }
     if let Some(png) = &job.png {
-        film.write_png(png)?;
+        film.write_png_with(png, preview)?;
     }
     Ok(())
 }
 
 /// Whether `job`'s output is this very image, finished and whole (its pixels read back); a
 /// missing PNG is made again from it.
-fn finished(job: &Job, meta: &ImageMeta) -> Result<bool, ImageError> {
+fn finished(job: &Job, meta: &ImageMeta, preview: Tonemap) -> Result<bool, ImageError> {
     let Ok(attributes) = Film::read_exr_meta(&job.output) else { return Ok(false) };
     if !meta.is_finished_in(&attributes) {
         return Ok(false);
     }
     let Ok(film) = Film::read_exr(&job.output) else { return Ok(false) };
     if let Some(png) = job.png.as_ref().filter(|p| !p.exists()) {
-        film.write_png(png)?;
+        film.write_png_with(png, preview)?;
     }
     Ok(true)
 }
