@@ -187,6 +187,19 @@ fn cases() -> Vec<Case> {
             ..case("a camera of width 0", &["cornell.toml", "field `camera.width`", "0 is not in"])
         },
         Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
+        // The keys a user tries in `[render]` get a hint before the list of those allowed.
+        Case {
+            edits: &[("cornell.toml", "[[mesh]]", "[render]\nthreads = 2\n\n[[mesh]]")],
+            ..case("threads in [render]", &["cornell.toml:", "unknown field `threads` (a command-line flag only: --threads)"])
+        },
+        Case {
+            edits: &[("cornell.toml", "[[mesh]]", "[render]\nwidth = 64\n\n[[mesh]]")],
+            ..case("width in [render]", &["cornell.toml:", "`[camera] width`"])
+        },
+        Case {
+            edits: &[("cornell.toml", "[[mesh]]", "[render]\ncaustic-photons = 2\n\n[[mesh]]")],
+            ..case("a flag's spelling in [render]", &["cornell.toml:", "spelt with underscores: `caustic_photons`"])
+        },
         Case { output: "missing/out.exr", ..case("output into a missing directory", &["missing"]) },
         Case { output: "/proc/out.exr", ..case("output where no file can be made", &["/proc/out.exr", "cannot write in /proc"]) },
         Case { output: "out.jpg", ..case("output of an unknown format", &["out.jpg", "`.jpg` is not an image format"]) },

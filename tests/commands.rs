@@ -228,3 +228,23 @@ fn exposure_and_tone_curve_shape_the_png_only() {
     assert!(white(&bright) > white(&plain) + 100, "{} white bytes vs {}", white(&bright), white(&plain));
     assert!(white(&aces) < white(&bright) / 2, "{} white bytes vs {}", white(&aces), white(&bright));
 }
+
+/// `--photons 0` is a render of the direct light (the README says so): no indirect map is made.
+#[test]
+fn zero_photons_render_the_direct_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = photonmap()
+        .current_dir(dir.path())
+        .args(["render", scene("cornell/cornell.toml").to_str().unwrap(), "-o", "d.exr", "--quiet"])
+        .args(["--width", "8", "--height", "8", "--spp", "4", "--photons", "0", "--stats", "d.json"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let stats: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("d.json")).unwrap()).unwrap();
+    let stage = stats["stages"].as_array().unwrap().iter().find(|s| s["name"] == "photons.indirect").unwrap();
+    assert_eq!(stage["ran"], false, "{stage}");
+    assert_eq!(stage["reason"], "photon budget is 0", "{stage}");
+    let film = photonmap::film::Film::read_exr(&dir.path().join("d.exr")).unwrap();
+    assert!(film.mean() > 0.01, "no direct light: mean {}", film.mean());
+}

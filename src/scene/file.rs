@@ -250,6 +250,7 @@ impl SceneFile {
         toml::from_str(text).map_err(|e| {
             // The parser's message may run over several lines ("invalid string\nexpected ...").
             let mut message = e.message().trim().lines().map(str::trim).collect::<Vec<_>>().join("; ");
+            message = with_hint(message);
             if let Some(span) = e.span() {
                 // An error at the end of the file is shown at the end of its last line.
                 let at = span.start.min(text.len());
@@ -262,6 +263,24 @@ impl SceneFile {
             SceneError::Toml { path: path.to_owned(), message }
         })
     }
+}
+
+/// The parser's "unknown field `x`, expected one of …" with a hint first for the keys a user
+/// is likely to try: command-line-only flags, the image size, and flag spellings
+/// (`caustic-photons` for `caustic_photons`).
+fn with_hint(message: String) -> String {
+    let Some(rest) = message.strip_prefix("unknown field `") else { return message };
+    let Some((key, tail)) = rest.split_once('`') else { return message };
+    let hint = match key {
+        "threads" | "quiet" | "checkpoint_every" | "exposure" | "tonemap" | "png" | "stats" | "frames"
+        | "cameras" | "resume" => format!("a command-line flag only: --{}", key.replace('_', "-")),
+        "width" | "height" => "the image size is the camera's: `[camera] width`/`height`".to_string(),
+        _ if key.contains('-') && RenderSettings::FIELDS.iter().any(|f| f.name == key.replace('-', "_")) => {
+            format!("keys are spelt with underscores: `{}`", key.replace('-', "_"))
+        }
+        _ => return message,
+    };
+    format!("unknown field `{key}` ({hint}){tail}")
 }
 
 /// Checks that `v` is finite, naming `field` otherwise.
