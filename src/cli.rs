@@ -300,9 +300,10 @@ pub struct ConvergeArgs {
     /// Write the log-log plot of RMSE against seconds as SVG here.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Other renderers' errors against the same reference (CSV: scene,renderer,seconds,rmse;
-    /// rows for this scene file's name are used): drawn dashed on the plot, and raced at equal
-    /// time in a second table.
+    /// Other renderers' errors against the same reference (CSV:
+    /// scene,renderer,width,height,seconds,rmse; rows for this scene file's name are used, and
+    /// refused unless measured at the renders' size): drawn dashed on the plot, and raced at
+    /// equal time in a second table.
     #[arg(long, value_name = "CSV")]
     pub peers: Option<PathBuf>,
     /// Random seed of every render.

@@ -395,10 +395,11 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     }
     check_outputs([args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten())?;
     let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
+    let (w, h) = (reference.width as u32, reference.height as u32);
     let peers = match &args.peers {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("{}", path.display()))?;
-            converge::parse_peers(&text, &stem).with_context(|| format!("{}", path.display()))?
+            converge::parse_peers(&text, &stem, w, h).with_context(|| format!("{}", path.display()))?
         }
         None => Vec::new(),
     };

@@ -248,3 +248,27 @@ fn zero_photons_render_the_direct_light() {
     let film = photonmap::film::Film::read_exr(&dir.path().join("d.exr")).unwrap();
     assert!(film.mean() > 0.01, "no direct light: mean {}", film.mean());
 }
+
+/// `converge --peers` refuses figures timed at another resolution than the renders'.
+#[test]
+fn converge_refuses_peers_measured_at_another_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let peers = dir.path().join("peers.csv");
+    std::fs::write(&peers, "scene,renderer,width,height,seconds,rmse\nfurnace,Other,64,64,5,0.01\n").unwrap();
+    let out = run(&[
+        "converge",
+        scene("furnace/furnace.toml").to_str().unwrap(),
+        "--exact",
+        "2",
+        "--budgets",
+        "0.1",
+        "--peers",
+        peers.to_str().unwrap(),
+    ]);
+    let err = text(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("peers.csv: line 2: Other was measured at 64x64 but the renders are 256x256"),
+        "{err}"
+    );
+}

@@ -205,10 +205,12 @@ pub fn csv(points: &[Point]) -> String {
 }
 
 /// An error measured elsewhere, for comparison: another renderer's RMSE against the same
-/// reference after `seconds` on the same kind of machine.
+/// reference after `seconds` on the same kind of machine, rendering `width × height` pixels.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Peer {
     pub renderer: String,
+    pub width: u32,
+    pub height: u32,
     pub seconds: f64,
     pub rmse: f64,
 }
@@ -221,31 +223,53 @@ pub struct PeersError {
     pub msg: String,
 }
 
-/// Reads the peers of scene `scene` from CSV text with the header `scene,renderer,seconds,rmse`
-/// (rows of other scenes are skipped; `#` starts a comment line).
-pub fn parse_peers(text: &str, scene: &str) -> Result<Vec<Peer>, PeersError> {
+/// The header a peers file starts with.
+pub const PEERS_HEADER: &str = "scene,renderer,width,height,seconds,rmse";
+
+/// Reads the peers of scene `scene` from CSV text with the header [`PEERS_HEADER`] (rows of
+/// other scenes are skipped; `#` starts a comment line). The sizes are checked against the
+/// renders' `width × height`: a time measured at another resolution races nothing.
+pub fn parse_peers(text: &str, scene: &str, width: u32, height: u32) -> Result<Vec<Peer>, PeersError> {
     let err = |line: usize, msg: String| PeersError { line, msg };
     let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     match rows.next() {
-        Some((_, h)) if h.trim() == "scene,renderer,seconds,rmse" => {}
-        Some((i, h)) => {
-            return Err(err(i + 1, format!("expected the header `scene,renderer,seconds,rmse`, found `{h}`")))
-        }
+        Some((_, h)) if h.trim() == PEERS_HEADER => {}
+        Some((i, h)) if h.trim() == "scene,renderer,seconds,rmse" => return Err(err(
+            i + 1,
+            format!(
+                "the header `{h}` gives no resolution: use `{PEERS_HEADER}` (the size each peer rendered)"
+            ),
+        )),
+        Some((i, h)) => return Err(err(i + 1, format!("expected the header `{PEERS_HEADER}`, found `{h}`"))),
         None => return Err(err(1, "empty file".into())),
     }
     let mut peers = Vec::new();
     for (i, l) in rows {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
-        if f.len() != 4 {
-            return Err(err(i + 1, format!("expected 4 fields, found {}", f.len())));
+        if f.len() != 6 {
+            return Err(err(i + 1, format!("expected 6 fields, found {}", f.len())));
         }
         let num = |k: usize, what: &str| match f[k].parse::<f64>() {
             Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
             _ => Err(err(i + 1, format!("{what} `{}` is not a positive number", f[k]))),
         };
-        let (seconds, rmse) = (num(2, "seconds")?, num(3, "rmse")?);
+        let side = |k: usize, what: &str| match f[k].parse::<u32>() {
+            Ok(v) if v > 0 => Ok(v),
+            _ => Err(err(i + 1, format!("{what} `{}` is not a positive whole number", f[k]))),
+        };
+        let (w, h) = (side(2, "width")?, side(3, "height")?);
+        let (seconds, rmse) = (num(4, "seconds")?, num(5, "rmse")?);
         if f[0] == scene {
-            peers.push(Peer { renderer: f[1].to_string(), seconds, rmse });
+            if (w, h) != (width, height) {
+                return Err(err(
+                    i + 1,
+                    format!(
+                        "{} was measured at {w}x{h} but the renders are {width}x{height}: their times are not comparable",
+                        f[1]
+                    ),
+                ));
+            }
+            peers.push(Peer { renderer: f[1].to_string(), width: w, height: h, seconds, rmse });
         }
     }
     Ok(peers)
@@ -341,7 +365,7 @@ mod tests {
         let c = csv(&pts);
         assert_eq!(c.lines().count(), 3);
         assert!(c.lines().nth(2).unwrap().starts_with("sppm,2,2.0000,1,0.030000"));
-        let peers = vec![Peer { renderer: "other".into(), seconds: 1.5, rmse: 0.1 }];
+        let peers = vec![Peer { renderer: "other".into(), width: 8, height: 8, seconds: 1.5, rmse: 0.1 }];
         let svg = plot(&pts, &peers, "t");
         assert!(svg.starts_with("<svg") && svg.contains("sppm (slope -0.74)"), "{svg}");
         assert!(svg.contains(">other</text>") && svg.contains("stroke-dasharray"), "{svg}");
@@ -349,14 +373,24 @@ mod tests {
 
     #[test]
     fn peers_are_read_for_one_scene_and_bad_rows_are_named() {
-        let text = "# measured elsewhere\nscene,renderer,seconds,rmse\ncornell,A,5,0.02\ncaustics,A,5,0.09\ncornell,A,20,0.01\n";
-        let peers = parse_peers(text, "cornell").unwrap();
+        let text = "# measured elsewhere\nscene,renderer,width,height,seconds,rmse\ncornell,A,64,48,5,0.02\n\
+                    caustics,A,256,256,5,0.09\ncornell,A,64,48,20,0.01\n";
+        let peers = parse_peers(text, "cornell", 64, 48).unwrap();
         assert_eq!(peers.len(), 2);
-        assert_eq!(peers[1], Peer { renderer: "A".into(), seconds: 20.0, rmse: 0.01 });
-        let e = parse_peers("scene,renderer,seconds,rmse\ncornell,A,five,0.02\n", "cornell").unwrap_err();
+        assert_eq!(peers[1], Peer { renderer: "A".into(), width: 64, height: 48, seconds: 20.0, rmse: 0.01 });
+        let h = "scene,renderer,width,height,seconds,rmse\n";
+        let e = parse_peers(&format!("{h}cornell,A,64,48,five,0.02\n"), "cornell", 64, 48).unwrap_err();
         assert_eq!((e.line, e.msg.contains("`five`")), (2, true), "{e}");
-        assert_eq!(parse_peers("a,b\n", "cornell").unwrap_err().line, 1);
-        assert_eq!(parse_peers("scene,renderer,seconds,rmse\ncornell,A,1\n", "cornell").unwrap_err().line, 2);
+        assert_eq!(parse_peers("a,b\n", "cornell", 64, 48).unwrap_err().line, 1);
+        assert_eq!(parse_peers(&format!("{h}cornell,A,1\n"), "cornell", 64, 48).unwrap_err().line, 2);
+        // A peer timed at another resolution is refused, naming both sizes.
+        let e = parse_peers(text, "cornell", 256, 256).unwrap_err();
+        assert!(e.line == 3 && e.msg.contains("64x48") && e.msg.contains("256x256"), "{e}");
+        // Rows of other scenes are not checked against this one's size.
+        assert_eq!(parse_peers(text, "caustics", 256, 256).unwrap().len(), 1);
+        let old =
+            parse_peers("scene,renderer,seconds,rmse\ncornell,A,5,0.02\n", "cornell", 64, 48).unwrap_err();
+        assert!(old.msg.contains("gives no resolution"), "{old}");
     }
 
     #[test]
@@ -367,8 +401,8 @@ mod tests {
             point(Method::Sppm, 6.0, 0.01),
         ];
         let peers = vec![
-            Peer { renderer: "A".into(), seconds: 5.0, rmse: 0.04 },
-            Peer { renderer: "A".into(), seconds: 0.5, rmse: 0.5 },
+            Peer { renderer: "A".into(), width: 8, height: 8, seconds: 5.0, rmse: 0.04 },
+            Peer { renderer: "A".into(), width: 8, height: 8, seconds: 0.5, rmse: 0.5 },
         ];
         let r = race(&pts, &peers);
         assert_eq!(r[0].best.map(|p| (p.method, p.rmse)), Some((Method::Path, 0.02)));
