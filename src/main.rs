@@ -413,8 +413,22 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     };
     let pool = pool(args.threads)?;
     outln!("{}", converge::TABLE_HEADER);
-    let points =
-        pool.install(|| converge::run(&scene, &reference, &study, |p| outln!("{}", converge::table_row(p))))?;
+    // One bar over the whole study, in milliseconds of budget (each run takes about its own).
+    let bars = progress::Bars::new(false);
+    let runs = study.methods.len() * study.budgets.len();
+    let total: f64 = study.budgets.iter().sum::<f64>() * study.methods.len() as f64;
+    bars.start("converge", (total * 1000.0) as u64);
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let points = pool.install(|| {
+        converge::run(&scene, &reference, &study, |p| {
+            bars.suspend(|| outln!("{}", converge::table_row(p)));
+            let k = finished.fetch_add(1, Ordering::Relaxed) + 1;
+            bars.message(&format!("{k} of {runs} renders"));
+            bars.advance((p.budget * 1000.0) as u64);
+        })
+    });
+    bars.finish();
+    let points = points?;
     outln!();
     for &m in &study.methods {
         if let Some(s) = converge::slope(&points, m) {

@@ -16,6 +16,17 @@ impl Bars {
     }
 }
 
+impl Bars {
+    /// Runs `f` (which prints to the terminal) with the bar hidden, then draws it again.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        let bar = self.bar.lock().ok().and_then(|b| b.clone());
+        match bar {
+            Some(bar) => bar.suspend(f),
+            None => f(),
+        }
+    }
+}
+
 impl Progress for Bars {
     fn start(&self, stage: &str, total: u64) {
         if !self.enabled {
@@ -23,9 +34,11 @@ impl Progress for Bars {
         }
         let bar = ProgressBar::new(total);
         bar.set_style(
-            ProgressStyle::with_template("{prefix:>18} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar())
-                .progress_chars("=> "),
+            ProgressStyle::with_template(
+                "{prefix:>18} [{bar:40}] {percent:>3}% {elapsed_precise} eta {eta} {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
         );
         bar.set_prefix(stage.to_string());
         if let Ok(mut b) = self.bar.lock() {
@@ -40,6 +53,14 @@ impl Progress for Bars {
         if let Ok(b) = self.bar.lock() {
             if let Some(bar) = b.as_ref() {
                 bar.inc(n);
+            }
+        }
+    }
+
+    fn message(&self, text: &str) {
+        if let Ok(b) = self.bar.lock() {
+            if let Some(bar) = b.as_ref() {
+                bar.set_message(text.to_string());
             }
         }
     }

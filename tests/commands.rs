@@ -272,3 +272,44 @@ fn converge_refuses_peers_measured_at_another_size() {
         "{err}"
     );
 }
+
+/// What `args` draws on a terminal (run under `script`, which gives it one), escapes and all;
+/// `None` where `script` (util-linux) is missing.
+fn on_a_terminal(dir: &Path, args: &[&str]) -> Option<String> {
+    let quote = |a: &str| format!("'{}'", a.replace('\'', r"'\''"));
+    let line: Vec<String> =
+        std::iter::once(env!("CARGO_BIN_EXE_photonmap")).chain(args.iter().copied()).map(quote).collect();
+    let out = Command::new("script")
+        .current_dir(dir)
+        .args(["-qec", &line.join(" "), "/dev/null"])
+        .stdin(Stdio::null())
+        .output()
+        .ok()?;
+    assert!(out.status.success(), "{}", text(&out.stdout));
+    Some(text(&out.stdout))
+}
+
+/// Every stage longer than a moment has a bar: the precomputed irradiance; a progressive
+/// render's bar counts passes and photons; `converge` has one bar over all its renders.
+#[test]
+fn long_stages_show_bars_with_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let cornell = scene("cornell/cornell.toml");
+    let cornell = cornell.to_str().unwrap();
+    let small = ["--width", "16", "--height", "16", "--spp", "1"];
+    let Some(plain) = on_a_terminal(dir.path(), &[&["render", cornell, "-o", "a.exr"][..], &small].concat())
+    else {
+        eprintln!("no `script` here: the bars cannot be seen");
+        return;
+    };
+    assert!(plain.contains("irradiance ["), "no irradiance bar: {plain:?}");
+    let sppm =
+        [&["render", cornell, "-o", "b.exr", "--integrator", "sppm", "--passes", "3"][..], &small].concat();
+    let sppm = on_a_terminal(dir.path(), &sppm).unwrap();
+    assert!(sppm.contains("3 passes, 300k photons"), "the sppm bar does not count: {sppm:?}");
+    let furnace = scene("furnace/furnace.toml");
+    let converge = ["converge", furnace.to_str().unwrap(), "--exact", "2"];
+    let converge = [&converge[..], &["--budgets", "0.2", "--methods", "path,sppm"]].concat();
+    let converge = on_a_terminal(dir.path(), &converge).unwrap();
+    assert!(converge.contains("converge [") && converge.contains("of 2 renders"), "{converge:?}");
+}

@@ -133,10 +133,15 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
         let sites = pick_sites(std::slice::from_ref(&hits), 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, (n * n) as u64);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
-        let cache =
-            PrecomputedIrradiance::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
-                Vec3::splat(k)
-            });
+        let cache = PrecomputedIrradiance::build(
+            sites,
+            std::slice::from_ref(&map),
+            &[],
+            &params,
+            &params,
+            |_, _| Vec3::splat(k),
+            |_| {},
+        );
         let x = Vec3::new(0.5, 0.0, 0.5);
         let mut scratch = Vec::new();
         let e = map.irradiance(x, Vec3::Y, &params, &mut scratch);

@@ -130,6 +130,8 @@ pub trait Progress: Sync {
     fn start(&self, _stage: &str, _total: u64) {}
     /// `n` more units are done.
     fn advance(&self, _n: u64) {}
+    /// What the stage has done so far, in words (`12 passes, 1.2M photons`), shown by its bar.
+    fn message(&self, _text: &str) {}
     /// The stage is over.
     fn finish(&self) {}
 }

@@ -64,6 +64,9 @@ pub fn run(
         sum.add(&film);
         counters += c;
         let (units, due) = schedule.finish_pass();
+        if progressive {
+            progress.message(&pass_message(schedule.done(), stats));
+        }
         progress.advance(if progressive { units } else { 0 });
         if due {
             schedule.checkpoint(&integrator.finish(sum.mean(schedule.done()), schedule.done()));
@@ -75,6 +78,24 @@ pub fn run(
     stats.passes = schedule.done();
     stats.cancelled = schedule.cancelled();
     (integrator.finish(sum.mean(schedule.done()), schedule.done()), counters)
+}
+
+/// What a progressive render's bar says after `passes` passes: the passes and the photons
+/// traced over them (`12 passes, 1.2M photons`).
+fn pass_message(passes: u32, stats: &Stats) -> String {
+    let photons: u64 =
+        stats.photons.iter().filter(|(name, _)| *name != "irradiance_cache").map(|(_, m)| m.emitted).sum();
+    let count = |n: u64| match n {
+        0..=9_999 => n.to_string(),
+        10_000..=999_999 => format!("{:.0}k", n as f64 / 1e3),
+        _ => format!("{:.1}M", n as f64 / 1e6),
+    };
+    let passes = if passes == 1 { "1 pass".to_string() } else { format!("{passes} passes") };
+    if photons == 0 {
+        passes
+    } else {
+        format!("{passes}, {} photons", count(photons))
+    }
 }
 
 /// The camera stage of a pass: `f` under the stage name `camera` in `stats`, with a progress

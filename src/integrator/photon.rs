@@ -93,7 +93,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             return kept;
         }
         let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass.seed, stats, progress);
-        let irradiance = self.precompute(stats, &maps, sites, pass.seed);
+        let irradiance = self.precompute(stats, &maps, sites, pass.seed, progress);
         let made = Rc::new(PassMaps { maps, irradiance });
         self.cache.put(pass.index, &made);
         made
@@ -124,6 +124,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         maps: &PhotonMaps,
         sites: Vec<SitePoint>,
         seed: u64,
+        progress: &dyn Progress,
     ) -> PrecomputedIrradiance {
         if sites.is_empty() {
             let why = if self.cfg.irradiance_cache {
@@ -136,6 +137,8 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         }
         let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
         let g = &self.gathers;
+        progress.start("irradiance", sites.len() as u64);
+        let done = |n: u64| progress.advance(n);
         let irradiance = stats.run("irradiance", reason, |_| {
             if self.cfg.indirect != IndirectMode::FinalGather {
                 // Only final gathering reads the direct part.
@@ -147,6 +150,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
                     &g.indirect,
                     &g.caustic,
                     |_, _| Vec3::ZERO,
+                    done,
                 );
             }
             // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
@@ -166,8 +170,10 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
                 &g.indirect,
                 &g.caustic,
                 direct,
+                done,
             )
         });
+        progress.finish();
         let bytes = irradiance.bytes() as u64;
         let record = MapStats { stored: irradiance.len() as u64, bytes, ..Default::default() };
         stats.photons.insert("irradiance_cache".into(), record);

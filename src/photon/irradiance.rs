@@ -217,9 +217,13 @@ pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<SitePoint> {
         .collect()
 }
 
+/// Sites estimated by one task of [`PrecomputedIrradiance::build`] (and reported at once).
+pub const SITE_BLOCK: usize = 1024;
+
 impl PrecomputedIrradiance {
     /// Estimates the irradiance at each site (in parallel) and indexes the sites: indirect and
-    /// caustic from the maps, direct from `direct(site_index, site)`.
+    /// caustic from the maps, direct from `direct(site_index, site)`; `done(n)` is told of every
+    /// `n` sites estimated (in blocks of [`SITE_BLOCK`], for a progress bar).
     pub fn build(
         sites: Vec<SitePoint>,
         indirect: &[PhotonMap],
@@ -227,6 +231,7 @@ impl PrecomputedIrradiance {
         gather: &GatherParams,
         caustic_gather: &GatherParams,
         direct: impl Fn(usize, &SitePoint) -> Vec3 + Sync,
+        done: impl Fn(u64) + Sync,
     ) -> Self {
         // Photons come in the order they were traced, scattered over the scene; gathering in
         // Morton order makes consecutive queries walk the same part of the tree (a cache win
@@ -235,17 +240,28 @@ impl PrecomputedIrradiance {
         morton_sort(&mut sites);
         let indirect_maps = indirect;
         let values: Vec<(SitePoint, Irradiance, Vec3)> = sites
-            .into_par_iter()
+            .par_chunks(SITE_BLOCK)
             .enumerate()
-            .map_init(Vec::new, |scratch: &mut Vec<Neighbor>, (i, site)| {
-                let (pos, n) = (site.pos, site.n);
-                let [mut indirect, mut back] = [Vec3::ZERO; 2];
-                for m in indirect_maps {
-                    let [f, b] = m.irradiance_sides(pos, n, gather, scratch);
-                    (indirect, back) = (indirect + f, back + b);
-                }
-                let caustic = caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, scratch)).sum();
-                (site, Irradiance { direct: direct(i, &site), indirect, caustic }, back)
+            .flat_map_iter(|(block, chunk)| {
+                let mut scratch: Vec<Neighbor> = Vec::new();
+                let out: Vec<_> = chunk
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &site)| {
+                        let (pos, n) = (site.pos, site.n);
+                        let [mut indirect, mut back] = [Vec3::ZERO; 2];
+                        for m in indirect_maps {
+                            let [f, b] = m.irradiance_sides(pos, n, gather, &mut scratch);
+                            (indirect, back) = (indirect + f, back + b);
+                        }
+                        let caustic =
+                            caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, &mut scratch)).sum();
+                        let i = block * SITE_BLOCK + j;
+                        (site, Irradiance { direct: direct(i, &site), indirect, caustic }, back)
+                    })
+                    .collect();
+                done(chunk.len() as u64);
+                out
             })
             .collect();
         let largest = values
@@ -393,10 +409,15 @@ mod tests {
         let sites = pick_sites(std::slice::from_ref(&hits), 3);
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
-        let cache =
-            PrecomputedIrradiance::build(sites, std::slice::from_ref(&map), &[], &params, &params, |_, _| {
-                Vec3::X
-            });
+        let cache = PrecomputedIrradiance::build(
+            sites,
+            std::slice::from_ref(&map),
+            &[],
+            &params,
+            &params,
+            |_, _| Vec3::X,
+            |_| {},
+        );
         let mut scratch = LookupScratch::default();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
         let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
@@ -446,6 +467,7 @@ mod tests {
                 &params,
                 &params,
                 |_, _| Vec3::ZERO,
+                |_| {},
             );
             let mut kept = LookupScratch::default();
             let (mut answered, mut total) = (0, 0);

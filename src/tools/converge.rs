@@ -234,12 +234,14 @@ pub fn parse_peers(text: &str, scene: &str, width: u32, height: u32) -> Result<V
     let mut rows = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
     match rows.next() {
         Some((_, h)) if h.trim() == PEERS_HEADER => {}
-        Some((i, h)) if h.trim() == "scene,renderer,seconds,rmse" => return Err(err(
-            i + 1,
-            format!(
+        Some((i, h)) if h.trim() == "scene,renderer,seconds,rmse" => {
+            return Err(err(
+                i + 1,
+                format!(
                 "the header `{h}` gives no resolution: use `{PEERS_HEADER}` (the size each peer rendered)"
             ),
-        )),
+            ))
+        }
         Some((i, h)) => return Err(err(i + 1, format!("expected the header `{PEERS_HEADER}`, found `{h}`"))),
         None => return Err(err(1, "empty file".into())),
     }
