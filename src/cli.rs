@@ -160,6 +160,10 @@ pub struct RenderArgs {
     /// No progress bars.
     #[arg(short, long)]
     pub quiet: bool,
+    /// Treat every warning about the scene (an unused material, no light, a texture or MTL
+    /// statement not rendered as written) as an error: stop before any work
+    #[arg(long)]
+    pub strict: bool,
     /// Image width (default: the scene's camera).
     #[arg(long)]
     pub width: Option<u32>,

@@ -104,7 +104,17 @@ fn install_interrupt_handler(progressive: bool) -> Result<()> {
 fn render(args: cli::RenderArgs) -> Result<Finished> {
     let wall = Instant::now();
     let mut stats = Stats::default();
-    let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| load_scene(&args.scene))?;
+    let scene = stats.run("load", "parse the scene, OBJ and MTL", |_| Scene::load(&args.scene))?;
+    if args.strict && !scene.warnings.is_empty() {
+        let more = match scene.warnings.len() - 1 {
+            0 => String::new(),
+            n => format!(" (and {n} more warning{})", if n == 1 { "" } else { "s" }),
+        };
+        bail!("--strict: {}{more}", scene.warnings[0]);
+    }
+    for w in &scene.warnings {
+        eprintln!("photonmap: warning: {w}");
+    }
     let settings = scene.render.overridden_by(&args.settings.to_settings());
     let frames = match &args.frames {
         Some(list) => Some(

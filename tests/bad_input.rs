@@ -106,8 +106,8 @@ fn cases() -> Vec<Case> {
             ..case("unknown TOML key", &["cornell.toml", "line 12", "unknown field `focal_length`"])
         },
         Case {
-            edits: &[("cornell.toml", "type = \"mirror\"", "type = \"plastic\"")],
-            ..case("unknown material type", &["cornell.toml", "line 35", "unknown variant `plastic`"])
+            edits: &[("cornell.toml", "[materials.white]\ntype = \"diffuse\"", "[materials.white]\ntype = \"plastic\"")],
+            ..case("unknown material type", &["cornell.toml", "line 18", "unknown variant `plastic`"])
         },
         Case {
             edits: &[(
@@ -187,6 +187,17 @@ fn cases() -> Vec<Case> {
             ..case("a camera of width 0", &["cornell.toml", "field `camera.width`", "0 is not in"])
         },
         Case { flags: &[("--threads", "0")], ..case("--threads 0", &["--threads 0"]) },
+        // --strict: a warning stops the render before any work.
+        Case {
+            flags: &[("--strict", "")],
+            edits: &[("cornell.toml", "[materials.white]", "[materials.whte]\ntype = \"diffuse\"\n\n[materials.white]")],
+            ..case("an unused material with --strict", &["cornell.toml", "--strict", "[materials.whte] is used by no triangle"])
+        },
+        Case {
+            flags: &[("--strict", "")],
+            edits: &[("cornell.toml", "ke = [17.0, 12.0, 4.0]", "ke = [0.0, 0.0, 0.0]")],
+            ..case("no light with --strict", &["cornell.toml", "--strict", "no [[light]] and no emissive material"])
+        },
         // The keys a user tries in `[render]` get a hint before the list of those allowed.
         Case {
             edits: &[("cornell.toml", "[[mesh]]", "[render]\nthreads = 2\n\n[[mesh]]")],

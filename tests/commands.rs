@@ -313,3 +313,66 @@ fn long_stages_show_bars_with_counts() {
     let converge = on_a_terminal(dir.path(), &converge).unwrap();
     assert!(converge.contains("converge [") && converge.contains("of 2 renders"), "{converge:?}");
 }
+
+/// What a scene asks for that changes nothing is warned, once, on stderr; the render goes on.
+#[test]
+fn an_unused_material_and_a_scene_without_light_are_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    for f in ["cornell.toml", "cornell.obj", "cornell.mtl"] {
+        std::fs::copy(scene("cornell").join(f), dir.path().join(f)).unwrap();
+    }
+    let toml = std::fs::read_to_string(dir.path().join("cornell.toml")).unwrap();
+    let toml =
+        toml.replacen("[materials.white]", "[materials.whte]\ntype = \"diffuse\"\n\n[materials.white]", 1);
+    let dark = toml.replacen("ke = [17.0, 12.0, 4.0]", "ke = [0.0, 0.0, 0.0]", 1);
+    std::fs::write(dir.path().join("typo.toml"), &toml).unwrap();
+    std::fs::write(dir.path().join("dark.toml"), &dark).unwrap();
+    let render = |name: &str| {
+        photonmap()
+            .current_dir(dir.path())
+            .args([
+                "render",
+                name,
+                "--quiet",
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--spp",
+                "1",
+                "--photons",
+                "1000",
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = render("typo.toml");
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert_eq!(err.matches("warning:").count(), 1, "{err}");
+    assert!(err.contains("typo.toml: [materials.whte] is used by no triangle"), "{err}");
+    assert!(err.contains("green, light, red, white"), "the materials in use are not named: {err}");
+    let out = render("dark.toml");
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("dark.toml: no [[light]] and no emissive material: the image will be black"),
+        "{err}"
+    );
+    // The shipped scenes warn of nothing.
+    let shipped = std::fs::read_dir(scene(""))
+        .unwrap()
+        .flat_map(|d| std::fs::read_dir(d.unwrap().path()).into_iter().flatten());
+    for entry in shipped {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            let out = run(&["info", path.to_str().unwrap()]);
+            assert!(
+                out.status.success() && out.stderr.is_empty(),
+                "{}: {}",
+                path.display(),
+                text(&out.stderr)
+            );
+        }
+    }
+}

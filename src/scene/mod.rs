@@ -219,6 +219,13 @@ impl Scene {
                 to_world: glam::Mat3::IDENTITY,
             });
         }
+        if lights.is_empty() && !resolved_emits {
+            warnings.push(format!(
+                "{}: no [[light]] and no emissive material: the image will be black",
+                path.display()
+            ));
+        }
+        warnings.extend(unused_materials(path, &file, &tri_names));
         let portals =
             file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
         validate_render(path, &file.render, &cameras)?;
@@ -406,6 +413,24 @@ fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneE
         c[k] = finite3(path, &format!("{field}[{k}]"), *corner)?;
     }
     Portal::from_corners(c).map_err(|e| SceneError::field(path, field, e))
+}
+
+/// A warning for each `[materials.NAME]` of the scene file that no triangle uses (a typo such
+/// as `[materials.whte]` would otherwise change nothing, silently), naming the ones in use.
+fn unused_materials(path: &Path, file: &SceneFile, tri_names: &[Option<String>]) -> Vec<String> {
+    let used: std::collections::BTreeSet<&str> = tri_names.iter().flatten().map(String::as_str).collect();
+    file.materials
+        .keys()
+        .filter(|name| !used.contains(name.as_str()))
+        .map(|name| {
+            let names: Vec<&str> = used.iter().copied().collect();
+            format!(
+                "{}: [materials.{name}] is used by no triangle (the meshes' materials: {})",
+                path.display(),
+                if names.is_empty() { "none".to_string() } else { names.join(", ") }
+            )
+        })
+        .collect()
 }
 
 /// Refuses `[render]` settings that cannot be honoured, before any work is done: the table is
