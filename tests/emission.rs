@@ -57,8 +57,11 @@ obj = "s.obj"
 /// file), in `dir`.
 fn scene(dir: &Path, light: &str, extra: &str) -> Result<Scene, String> {
     std::fs::write(dir.join("s.obj"), OBJ).unwrap();
-    std::fs::write(dir.join("s.mtl"), format!("newmtl floor\nKd 0.5 0.5 0.5\n\nnewmtl light\nKd 0 0 0\n{light}\n"))
-        .unwrap();
+    std::fs::write(
+        dir.join("s.mtl"),
+        format!("newmtl floor\nKd 0.5 0.5 0.5\n\nnewmtl light\nKd 0 0 0\n{light}\n"),
+    )
+    .unwrap();
     std::fs::write(dir.join("s.toml"), format!("{TOML}{extra}")).unwrap();
     Scene::load(dir.join("s.toml")).map_err(|e| e.to_string())
 }
@@ -178,7 +181,8 @@ fn the_scene_file_ke_texture_replaces_map_ke_and_ke_defaults_to_one() {
     let l = lights(&alone);
     assert!((l.total_power().x - 0.5 * std::f32::consts::PI).abs() < 0.01, "{}", l.total_power());
     // ke_texture replaces it: black, nothing emits.
-    let s = scene(d, "Ke 4 4 4\nmap_Ke half.png", "\n[materials.light]\nke_texture = \"black.png\"\n").unwrap();
+    let s =
+        scene(d, "Ke 4 4 4\nmap_Ke half.png", "\n[materials.light]\nke_texture = \"black.png\"\n").unwrap();
     let l = lights(&s);
     assert!(l.is_empty() && l.emitters().is_empty(), "a black texture has no power");
     let out = render_checked(&s, &settings(IntegratorKind::Photon), 16);
@@ -186,7 +190,8 @@ fn the_scene_file_ke_texture_replaces_map_ke_and_ke_defaults_to_one() {
     let out = render_checked(&s, &settings(IntegratorKind::Path), 16);
     assert_eq!(out.film.mean(), 0.0, "no light");
     // A diffuse material's ke texture is warned and dropped.
-    let s = scene(d, "Ke 4 4 4", "\n[materials.floor]\nke_texture = \"half.png\"\ntype = \"diffuse\"\n").unwrap();
+    let s =
+        scene(d, "Ke 4 4 4", "\n[materials.floor]\nke_texture = \"half.png\"\ntype = \"diffuse\"\n").unwrap();
     assert!(s.warnings.iter().any(|w| w.contains("ke texture is not used")), "{:?}", s.warnings);
 }
 
@@ -209,5 +214,9 @@ fn textured_light_renders_are_the_same_on_any_thread_count() {
     let set = RenderSettings { photons: Some(20_000), spp: Some(2), ..settings(IntegratorKind::Photon) };
     let one = common::on_threads(1, || render_checked(&s, &set, 16).film);
     let two = common::on_threads(3, || render_checked(&s, &set, 16).film);
-    assert!(one.pixels.iter().zip(&two.pixels).all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)));
+    assert!(one
+        .pixels
+        .iter()
+        .zip(&two.pixels)
+        .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)));
 }

@@ -25,6 +25,7 @@ use crate::sampling::{
 };
 use crate::texture::{Texture, Textures, Wrap};
 use glam::{Vec2, Vec3};
+use rayon::prelude::*;
 use std::f32::consts::PI;
 
 /// The largest `n` of the `n²` pieces a textured emitter is cut into (at most `2 n² = 512`
@@ -284,10 +285,33 @@ impl AreaLights {
         materials: &[Material],
         emission: Option<EmissionTextures<'_>>,
     ) -> Self {
+        // One copy of each emission texture an emissive material the mesh uses has.
         let mut maps: Vec<EmitterTexture> = Vec::new();
-        let mut map_of: Vec<Option<u32>> = Vec::new();
-        let mut pieces: Vec<Pieces> = Vec::new();
-        let triangles: Vec<EmitterTriangle> = (0..mesh.len() as u32)
+        let mut map_of: Vec<Option<u32>> = vec![None; materials.len()];
+        if let Some(e) = emission {
+            let mut used = vec![false; materials.len()];
+            for &m in tri_material {
+                if let Some(u) = used.get_mut(m as usize) {
+                    *u = true;
+                }
+            }
+            for (id, m) in materials.iter().enumerate() {
+                let Some(Some(map)) = e.maps.get(id) else { continue };
+                if used[id] && m.emission().max_element() > 0.0 {
+                    map_of[id] = Some(maps.len() as u32);
+                    maps.push(EmitterTexture {
+                        texture: e.textures.get(map.texture).clone(),
+                        scale: map.scale,
+                        offset: map.offset,
+                        wrap: map.wrap,
+                        factor: map.factor,
+                    });
+                }
+            }
+        }
+        // The triangles in parallel (their pieces' lookups are the work), kept in mesh order.
+        let built: Vec<(EmitterTriangle, Option<Pieces>)> = (0..mesh.len() as u32)
+            .into_par_iter()
             .filter_map(|prim| {
                 let id = *tri_material.get(prim as usize)? as usize;
                 let ke = materials.get(id)?.emission();
@@ -297,38 +321,27 @@ impl AreaLights {
                     return None;
                 }
                 let vertices = mesh.triangle(prim);
-                let map = emission.and_then(|e| Some((e, (*e.maps.get(id)?)?)));
-                let Some((e, map)) = map else {
-                    return Some(EmitterTriangle { prim, vertices, normal, area, ke, pieces: None });
+                let (Some(e), Some(index)) = (emission, map_of[id]) else {
+                    return Some((EmitterTriangle { prim, vertices, normal, area, ke, pieces: None }, None));
                 };
-                if map_of.len() <= id {
-                    map_of.resize(id + 1, None);
-                }
-                let index = *map_of[id].get_or_insert_with(|| {
-                    maps.push(EmitterTexture {
-                        texture: e.textures.get(map.texture).clone(),
-                        scale: map.scale,
-                        offset: map.offset,
-                        wrap: map.wrap,
-                        factor: map.factor,
-                    });
-                    (maps.len() - 1) as u32
-                });
                 let tri = mesh.indices[prim as usize];
                 let uvs = if e.uvs.is_empty() { [Vec2::ZERO; 3] } else { tri.map(|v| e.uvs[v as usize]) };
                 let (p, mean) = Pieces::build(index, ke, uvs, &maps);
                 if !(luminance(mean.max(Vec3::ZERO)) > 0.0) {
                     return None;
                 }
-                pieces.push(p);
-                Some(EmitterTriangle {
-                    prim,
-                    vertices,
-                    normal,
-                    area,
-                    ke: mean,
-                    pieces: Some((pieces.len() - 1) as u32),
-                })
+                Some((EmitterTriangle { prim, vertices, normal, area, ke: mean, pieces: None }, Some(p)))
+            })
+            .collect();
+        let mut pieces: Vec<Pieces> = Vec::new();
+        let triangles: Vec<EmitterTriangle> = built
+            .into_iter()
+            .map(|(mut t, p)| {
+                if let Some(p) = p {
+                    t.pieces = Some(pieces.len() as u32);
+                    pieces.push(p);
+                }
+                t
             })
             .collect();
         let weights: Vec<f32> = triangles.iter().map(|t| t.area * luminance(t.ke.max(Vec3::ZERO))).collect();
