@@ -465,6 +465,7 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     // The emissive texture (sRGB) multiplies emissiveFactor × strength texel by texel.
     let lamp = s.material_names.iter().position(|m| m == "lamp").unwrap();
     assert!(s.maps[lamp].ke.is_some(), "lamp's emissiveTexture is its ke map");
+    assert!(s.emission_maps().is_some_and(|m| m[lamp].is_some()), "and the area lights read it");
     match s.material_at(
         s.tri_material.iter().position(|&m| m as usize == lamp).unwrap() as u32,
         glam::Vec2::ZERO,
