@@ -94,9 +94,13 @@ pub fn direct_light<A: Accel>(
             let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
             let (le, light_pdf) = match s.trace(&ray, c) {
                 Some(y) => {
-                    let le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
+                    let mut le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
                     if le == Vec3::ZERO {
                         continue;
+                    }
+                    if s.scene.textured {
+                        // An emission texture varies it.
+                        le = s.scene.material_at(y.prim, y.uv).emitted(y.n, -bs.wi);
                     }
                     (le, s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n))
                 }

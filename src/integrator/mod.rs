@@ -19,7 +19,7 @@ use crate::accel::{Accel, AccelError, AccelOptions, AnyAccel};
 use crate::config::{Integrator, RenderConfig};
 use crate::film::Film;
 use crate::frame::{Counters, Frame, Progress};
-use crate::light::LightSet;
+use crate::light::{EmissionTextures, LightSet};
 use crate::scene::{Camera, Scene};
 use crate::stats::Stats;
 use std::borrow::Cow;
@@ -124,7 +124,20 @@ impl<'s> Prepared<'s> {
         stats.accel = accel.name().to_string();
         let lights = stats.run("lights", "prepare emitters and light sampling", |_| {
             let portals = if cfg.portals { &scene.portals[..] } else { &[] };
-            LightSet::with_portals(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials, portals)
+            let maps = scene.emission_maps();
+            let emission = maps.as_deref().map(|maps| EmissionTextures {
+                uvs: &scene.attributes.uvs,
+                textures: &scene.textures,
+                maps,
+            });
+            LightSet::with_emission(
+                &scene.lights,
+                &scene.mesh,
+                &scene.tri_material,
+                &scene.materials,
+                portals,
+                emission,
+            )
         });
         let dark = lights.lights().iter().filter(|l| !(l.power().max_element() > 0.0)).count();
         if dark > 0 {

@@ -18,7 +18,7 @@ pub mod portal;
 mod set;
 mod spot;
 
-pub use area::{AreaLights, EmitterTriangle};
+pub use area::{AreaLights, EmissionMap, EmissionTextures, EmitterTriangle, MAX_SUBDIVISION};
 pub use distant::DistantLight;
 pub use environment::{EnvironmentLight, EnvironmentMap};
 pub use point::PointLight;
@@ -114,16 +114,18 @@ pub fn area_lights(mesh: &TriangleMesh, tri_material: &[u32], materials: &[Mater
 }
 
 /// The explicit lights followed by the area lights (if any), preprocessed for `mesh.bounds()`
-/// (distant lights emit through `portals`, when there are any).
+/// (distant lights emit through `portals`, when there are any; emissive materials with a
+/// texture in `emission` emit it).
 pub fn build_lights(
     descs: &[LightDesc],
     mesh: &TriangleMesh,
     tri_material: &[u32],
     materials: &[Material],
     portals: &[Portal],
+    emission: Option<EmissionTextures<'_>>,
 ) -> Vec<Light> {
     let mut lights: Vec<Light> = descs.iter().map(Light::from_desc).collect();
-    let area = area_lights(mesh, tri_material, materials);
+    let area = AreaLights::from_mesh_textured(mesh, tri_material, materials, emission);
     if !area.is_empty() {
         lights.push(Light::Area(area));
     }
@@ -201,7 +203,7 @@ impl Light {
     }
 
     /// A photon: `u1` chooses the position (area, distant, environment), `u2` the direction
-    /// (point, spot, area, environment). Photons of one light all carry the same power (equal luminance for area lights).
+    /// (point, spot, area, environment). Photons of one light all carry the same power (equal luminance for untextured area lights).
     pub fn sample_emission(&self, u1: [f32; 2], u2: [f32; 2]) -> Option<EmissionSample> {
         match self {
             Light::Point(l) => l.sample_emission(u2),
@@ -229,7 +231,7 @@ mod tests {
             LightDesc::Point { position: Vec3::Y, intensity: Vec3::ONE },
             LightDesc::Distant { direction: Vec3::NEG_Z, irradiance: Vec3::ONE },
         ];
-        let lights = build_lights(&descs, &mesh, &[0, 1], &mats, &[]);
+        let lights = build_lights(&descs, &mesh, &[0, 1], &mats, &[], None);
         assert_eq!(lights.len(), 3);
         assert!(lights[0].is_delta() && lights[1].is_delta() && !lights[2].is_delta());
         assert!(lights[1].power().x > 0.0, "distant light preprocessed");

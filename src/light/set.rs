@@ -3,7 +3,7 @@
 //! emitter of its own (so the photon pass can stratify over each).
 
 use super::LightDesc;
-use super::{build_lights, power_distribution, Light, LightSample, Portal};
+use super::{build_lights, power_distribution, EmissionTextures, Light, LightSample, Portal};
 use crate::geometry::TriangleMesh;
 use crate::material::Material;
 use crate::sampling::Distribution1D;
@@ -61,7 +61,20 @@ impl LightSet {
         materials: &[Material],
         portals: &[Portal],
     ) -> Self {
-        let lights = build_lights(descs, mesh, tri_material, materials, portals);
+        Self::with_emission(descs, mesh, tri_material, materials, portals, None)
+    }
+
+    /// As [`LightSet::with_portals`], the emissive materials with a texture in `emission`
+    /// emitting it.
+    pub fn with_emission(
+        descs: &[LightDesc],
+        mesh: &TriangleMesh,
+        tri_material: &[u32],
+        materials: &[Material],
+        portals: &[Portal],
+        emission: Option<EmissionTextures<'_>>,
+    ) -> Self {
+        let lights = build_lights(descs, mesh, tri_material, materials, portals, emission);
         let select = power_distribution(&lights);
         let mut emitters = Vec::new();
         let mut area = None;

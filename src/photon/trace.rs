@@ -4,7 +4,8 @@
 //! * The budget is split among emitters in proportion to their power, and a photon carries the
 //!   flux of its emission sample ([`crate::light::Emission::power`]) over the photons expected
 //!   from its emitter: every light samples in proportion to what it emits, so every photon of a
-//!   map carries the same power, and brighter lights emit more photons, not stronger ones.
+//!   map carries the same power (a textured light's nearly: its texture varies within the
+//!   pieces it is sampled by), and brighter lights emit more photons, not stronger ones.
 //!   Counts are rounded stochastically so the split stays unbiased.
 //! * Emissive triangles are emitters of their own, each covered by a stratified grid (one photon
 //!   per cell, at a random position inside it) with cosine-distributed directions.

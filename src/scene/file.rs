@@ -198,6 +198,9 @@ pub struct MaterialEntry {
     pub kd_texture: Option<std::path::PathBuf>,
     /// An image for `ks`, replacing the MTL's `map_Ks`.
     pub ks_texture: Option<std::path::PathBuf>,
+    /// An image multiplying `ke` (emitted radiance; `ke` is 1 unless given), replacing the
+    /// MTL's `map_Ke`.
+    pub ke_texture: Option<std::path::PathBuf>,
     /// A tangent-space normal map, replacing the MTL's `norm` or colour `map_Bump`.
     pub normal_texture: Option<std::path::PathBuf>,
     /// A height map (its red channel, linear), replacing the MTL's grey `map_Bump`.

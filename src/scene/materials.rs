@@ -99,8 +99,17 @@ fn material(
     let field = |f: &str| format!("materials.{name}.{f}");
     let kd = e.kd.or(mtl.kd).unwrap_or([0.0; 3]);
     let ks = e.ks.or(mtl.ks).unwrap_or([0.0; 3]);
-    let ke = e.ke.or(mtl.ke).unwrap_or([0.0; 3]);
-    let kind = e.kind.unwrap_or_else(|| mtl_kind(mtl));
+    // An emission texture multiplies `ke`, which is then 1 unless given (and makes the
+    // material emissive unless its type says otherwise).
+    let ke_map = e.ke_texture.is_some() || mtl.maps.iter().any(|m| m.keyword == "map_ke");
+    let ke = e.ke.or(mtl.ke).unwrap_or(if ke_map { [1.0; 3] } else { [0.0; 3] });
+    let kind = e.kind.unwrap_or_else(|| {
+        if ke_map && ke.iter().any(|&x| x > 0.0) {
+            MaterialKind::Emissive
+        } else {
+            mtl_kind(mtl)
+        }
+    });
     let m = match kind {
         MaterialKind::Diffuse => Material::Diffuse { kd: reflectance3(path, &field("kd"), kd)? },
         MaterialKind::Glossy => {
@@ -192,12 +201,15 @@ pub struct MaterialMaps {
     /// normal (pbrt's and Mitsuba's bump mapping): the surface is displaced along its shading
     /// normal by the texel value times `factor` (MTL `-bm`, `bump_scale`), in scene units.
     pub bump: Option<TextureRef>,
+    /// `map_Ke` / `ke_texture` / glTF `emissiveTexture`: multiplies an emissive material's `ke`
+    /// (the emitted radiance is `ke` times the texel).
+    pub ke: Option<TextureRef>,
 }
 
 impl MaterialMaps {
     /// Whether no texture changes the material's constants (a normal map may still bend it).
     pub fn is_empty(&self) -> bool {
-        self.kd.is_none() && self.ks.is_none()
+        self.kd.is_none() && self.ks.is_none() && self.ke.is_none()
     }
 
     /// `m` with its textured constants looked up at `uv`. Albedos are clamped to `[0, 1]`, and
@@ -209,7 +221,10 @@ impl MaterialMaps {
         };
         match m {
             Material::Diffuse { kd } => Material::Diffuse { kd: albedo(self.kd, kd) },
-            Material::Emissive { kd, ke } => Material::Emissive { kd: albedo(self.kd, kd), ke },
+            Material::Emissive { kd, ke } => Material::Emissive {
+                kd: albedo(self.kd, kd),
+                ke: self.ke.map_or(ke, |t| t.rgb(textures, uv) * ke),
+            },
             Material::Glossy { kd, ks, ns } => {
                 let (kd, ks) = (albedo(self.kd, kd), albedo(self.ks, ks));
                 let over = (kd + ks).max(Vec3::ONE);
@@ -221,8 +236,9 @@ impl MaterialMaps {
     }
 }
 
-/// The texture maps of material `name`: the scene file's `kd_texture`/`ks_texture` (relative
-/// to the scene file) over the MTL's `map_Kd`/`map_Ks` over the glTF's (`preset`). Maps the
+/// The texture maps of material `name`: the scene file's `kd_texture`/`ks_texture`/`ke_texture`
+/// (relative to the scene file) over the MTL's `map_Kd`/`map_Ks`/`map_Ke` over the glTF's
+/// (`preset`). Maps the
 /// material cannot use, and the MTL maps not rendered yet, are named in `warnings`.
 #[allow(clippy::too_many_arguments)] // one material's three sources, and where the results go
 fn texture_maps(
@@ -260,6 +276,7 @@ fn texture_maps(
         match map.keyword.as_str() {
             "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
+            "map_ke" => maps.ke = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "norm" | "map_bump" | "bump" => {
                 let mut t = from_mtl(map, textures, warnings, Encoding::Data)?;
                 if map.keyword != "norm" && textures.get(t.texture).is_grey() {
@@ -299,6 +316,9 @@ fn texture_maps(
         if let Some(f) = &e.ks_texture {
             maps.ks = Some(from_file("ks_texture", f, textures, Encoding::Colour)?);
         }
+        if let Some(f) = &e.ke_texture {
+            maps.ke = Some(from_file("ke_texture", f, textures, Encoding::Colour)?);
+        }
         if e.normal_texture.is_some() && e.bump_texture.is_some() {
             return Err(SceneError::field(
                 path,
@@ -336,6 +356,11 @@ fn texture_maps(
     if maps.ks.is_some() && !uses_ks {
         warnings.push(format!("material {name}: a {kind} material has no ks; its ks texture is not used"));
         maps.ks = None;
+    }
+    if maps.ke.is_some() && m.emission() == Vec3::ZERO {
+        warnings
+            .push(format!("material {name}: a {kind} material emits nothing; its ke texture is not used"));
+        maps.ke = None;
     }
     Ok(maps)
 }

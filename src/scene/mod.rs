@@ -199,7 +199,6 @@ impl Scene {
         let resolved = materials::resolve(path, &tri_names, given, &file)?;
         let resolved_emits = resolved.materials.iter().any(|m| m.emission().max_element() > 0.0);
         warnings.extend(resolved.warnings);
-        // (A glTF's emissive texture is loaded for its mean only: no map uses it.)
         let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some() || m.bump.is_some());
         if textured && !attributes.has_uvs() {
             warnings.push(
@@ -308,6 +307,25 @@ impl Scene {
         } else {
             maps.apply(m, &self.textures, uv)
         }
+    }
+
+    /// Each material's emission texture, for the area lights (`None` for all when no
+    /// material has one).
+    pub fn emission_maps(&self) -> Option<Vec<Option<crate::light::EmissionMap>>> {
+        let maps: Vec<_> = self
+            .maps
+            .iter()
+            .map(|m| {
+                m.ke.map(|t| crate::light::EmissionMap {
+                    texture: t.texture,
+                    scale: t.scale,
+                    offset: t.offset,
+                    wrap: t.wrap,
+                    factor: t.factor,
+                })
+            })
+            .collect();
+        maps.iter().any(Option::is_some).then_some(maps)
     }
 
     /// How many triangles use each material (by index: two materials with equal values are

@@ -5,7 +5,7 @@
 //!
 //! | glTF | photonmap |
 //! |---|---|
-//! | emissive × strength ≠ 0 | `emissive`, `kd` = base colour, `ke` = emissive (× the mean of `emissiveTexture`) |
+//! | emissive × strength ≠ 0 | `emissive`, `kd` = base colour, `ke` = emissive, times `emissiveTexture` texel by texel |
 //! | transmission > 0.5 | `glass`, `ior` (default 1.5) |
 //! | metallic ≥ 0.5, roughness 0 | `mirror`, `ks` = base colour |
 //! | metallic ≥ 0.5 | `glossy`, `kd` = 0, `ks` = base colour, `ns` = 2/α² − 2, α = roughness² |
@@ -154,7 +154,7 @@ pub fn material(
         return Err(at(path, format!("{field}.pbrMetallicRoughness"), "a factor is not finite"));
     }
     let strength = m.emissive_strength().unwrap_or(1.0);
-    let mut ke = Vec3::from(m.emissive_factor()) * strength;
+    let ke = Vec3::from(m.emissive_factor()) * strength;
     if !ke.is_finite() || ke.min_element() < 0.0 {
         return Err(at(
             path,
@@ -171,15 +171,13 @@ pub fn material(
         )?),
         None => None,
     };
-    if let Some(info) = m.emissive_texture() {
-        let f = format!("{field}.emissiveTexture");
-        let t = images.reference(&f, &info, Vec3::ONE, warnings)?;
-        ke *= images.textures.get(t.texture).mean();
-        warnings.say(
-            format!("emissive-texture {name}"),
-            format!("{f} (material {name}): emissive texture averaged (per-texel emission is not implemented yet)"),
-        );
-    }
+    // The emitted radiance is emissiveFactor × strength × the texel (sRGB).
+    let ke_map = match m.emissive_texture() {
+        Some(info) => {
+            Some(images.reference(&format!("{field}.emissiveTexture"), &info, Vec3::ONE, warnings)?)
+        }
+        None => None,
+    };
     if pbr.metallic_roughness_texture().is_some() {
         warnings.say(
             format!("mr {name}"),
@@ -232,6 +230,7 @@ pub fn material(
         mtl.kd = Some(unit(base));
         mtl.illum = Some(1);
         maps.kd = base_map;
+        maps.ke = ke_map;
         if metal >= 0.5 || transmission > 0.5 {
             warnings.say(
                 format!("emissive-kind {name}"),
