@@ -9,7 +9,7 @@
 #[allow(dead_code)]
 mod common;
 
-use common::render_checked;
+use common::{on_threads, render_checked};
 use photonmap::accel::AccelKind;
 use photonmap::config::RenderSettings;
 use photonmap::film::Film;
@@ -133,6 +133,19 @@ fn a_half_open_fence_lets_half_the_light_through() {
         );
         let c = render_checked(&closed, &settings(accel), 16).film.mean();
         assert!(c < 0.02 * b.mean(), "{accel:?}: closed fence {c} vs open {}", b.mean());
+    }
+}
+
+#[test]
+fn cutouts_render_the_same_on_any_number_of_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    stripes(&d.join("fence.png"));
+    let s = floor_scene(d, "map_d fence.png", true, "");
+    for accel in accels() {
+        let one = on_threads(1, || render_checked(&s, &settings(accel), 16).film);
+        let two = on_threads(2, || render_checked(&s, &settings(accel), 16).film);
+        assert!(same_pixels(&one, &two), "{accel:?}: 1 and 2 threads differ");
     }
 }
 
