@@ -10,7 +10,7 @@
 use glam::{Vec2, Vec3, Vec4};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 /// The largest texture side accepted: 32768 texels (a 32k × 32k 8-bit image is 4 GiB).
 pub const MAX_SIDE: u32 = 32_768;
@@ -50,6 +50,8 @@ pub struct Texture {
     pub path: PathBuf,
     width: u32,
     height: u32,
+    /// Whether the image has an alpha channel (without one, every texel's alpha is 1).
+    has_alpha: bool,
     texels: Texels,
 }
 
@@ -117,6 +119,7 @@ impl Texture {
     fn from_image(path: &Path, image: image::DynamicImage, encoding: Encoding) -> Texture {
         use image::DynamicImage as D;
         let (width, height) = (image.width(), image.height());
+        let has_alpha = image.color().has_alpha();
         let texels = match image {
             D::ImageLuma8(_) | D::ImageLumaA8(_) | D::ImageRgb8(_) | D::ImageRgba8(_) => {
                 let bytes = image.into_rgba8().pixels().map(|p| p.0).collect();
@@ -143,14 +146,14 @@ impl Texture {
                 )
             }
         };
-        Texture { path: path.to_owned(), width, height, texels }
+        Texture { path: path.to_owned(), width, height, has_alpha, texels }
     }
 
     /// A texture of linear RGBA texels, `width × height`, rows from the top (for tests and
     /// generated images).
     pub fn from_linear(path: &Path, width: u32, height: u32, texels: Vec<Vec4>) -> Texture {
         assert_eq!(texels.len(), (width * height) as usize, "texel count");
-        Texture { path: path.to_owned(), width, height, texels: Texels::Linear(texels) }
+        Texture { path: path.to_owned(), width, height, has_alpha: true, texels: Texels::Linear(texels) }
     }
 
     pub fn width(&self) -> u32 {
@@ -212,6 +215,40 @@ impl Texture {
         a.lerp(b, fx).lerp(c.lerp(d, fx), fy)
     }
 
+    /// The alpha channel at `uv`, bilinearly filtered (linear; 1 for an image without one).
+    #[inline]
+    pub fn alpha(&self, uv: Vec2, wrap: Wrap) -> f32 {
+        self.channel(uv, wrap, 3)
+    }
+
+    /// Channel `channel` (0 red … 3 alpha) at `uv`, bilinearly filtered: the same value as that
+    /// channel of [`Texture::sample`].
+    #[inline]
+    pub fn channel(&self, uv: Vec2, wrap: Wrap, channel: usize) -> f32 {
+        let ([a, b, c, d], fx, fy) = self.cell(uv, wrap);
+        let (a, b, c, d) = (a[channel], b[channel], c[channel], d[channel]);
+        let top = a + (b - a) * fx;
+        top + (c + (d - c) * fx - top) * fy
+    }
+
+    /// Whether the image has an alpha channel ([`Texture::alpha`] is 1 everywhere without).
+    pub fn has_alpha(&self) -> bool {
+        self.has_alpha
+    }
+
+    /// The smallest and largest value of channel `channel` (0 red … 3 alpha) over the texels:
+    /// the bounds of what bilinear filtering returns anywhere.
+    pub fn channel_range(&self, channel: usize) -> (f32, f32) {
+        let mut range = (f32::INFINITY, f32::NEG_INFINITY);
+        for y in 0..self.height {
+            for x in 0..self.width {
+                let c = self.texel(x, y)[channel];
+                range = (range.0.min(c), range.1.max(c));
+            }
+        }
+        range
+    }
+
     /// The bilinear filter's derivatives at `uv`, `(d/du, d/dv)` per channel: the exact slopes of
     /// what [`Texture::sample`] returns, constant across each texel cell (for bump mapping).
     #[inline]
@@ -258,7 +295,8 @@ fn srgb_decode(c: f32) -> f32 {
 /// The textures of a scene, each file loaded once.
 #[derive(Clone, Debug, Default)]
 pub struct Textures {
-    pub list: Vec<Texture>,
+    /// Shared, so that what outlives the scene's borrow (alpha cut-outs) can hold them.
+    pub list: Vec<Arc<Texture>>,
     by_path: HashMap<(PathBuf, Encoding), u32>,
 }
 
@@ -277,14 +315,14 @@ impl Textures {
         }
         let t = Texture::load_as(path, encoding)?;
         let i = self.list.len() as u32;
-        self.list.push(t);
+        self.list.push(Arc::new(t));
         self.by_path.insert(key, i);
         Ok(i)
     }
 
     /// Adds an already-made texture.
     pub fn push(&mut self, t: Texture) -> u32 {
-        self.list.push(t);
+        self.list.push(Arc::new(t));
         (self.list.len() - 1) as u32
     }
 
@@ -299,7 +337,7 @@ impl Textures {
 
     /// Bytes all the texels take.
     pub fn bytes(&self) -> usize {
-        self.list.iter().map(Texture::bytes).sum()
+        self.list.iter().map(|t| t.bytes()).sum()
     }
 }
 

@@ -105,7 +105,7 @@ fn check_report(case: &str, r: &AgreeReport, limits: Limits, culprit: impl FnOnc
 /// Builds `kind` over `mesh`. With the `embree` feature a failed Embree build panics: the test
 /// fails rather than silently comparing fewer backends.
 fn build(kind: AccelKind, mesh: &TriangleMesh) -> AnyAccel {
-    match AnyAccel::build(kind, mesh, AccelOptions::default()) {
+    match AnyAccel::build(kind, mesh, None, AccelOptions::default()) {
         Ok(a) => a,
         Err(e) => panic!("building {kind:?} over {} triangles failed: {e}", mesh.len()),
     }
@@ -218,7 +218,7 @@ fn check_scene(case: &str, scene: &Scene, n: usize, limits: Limits) {
 #[test]
 fn embree_is_built_when_enabled() {
     let tri = TriangleMesh { positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y], indices: vec![[0, 1, 2]] };
-    let r = AnyAccel::build(AccelKind::Embree, &tri, AccelOptions::default());
+    let r = AnyAccel::build(AccelKind::Embree, &tri, None, AccelOptions::default());
     if cfg!(feature = "embree") {
         let a = r.unwrap_or_else(|e| panic!("the `embree` feature is on but Embree cannot be built: {e}"));
         assert_eq!(a.name(), "embree");

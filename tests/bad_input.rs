@@ -86,6 +86,18 @@ fn cases() -> Vec<Case> {
             ..case("missing scene-file texture", &["cornell.toml", "materials.red.kd_texture", "gone.png"])
         },
         Case {
+            edits: &[("cornell.mtl", "Kd 0.63 0.065 0.05\n", "Kd 0.63 0.065 0.05\nmap_d nosuch-alpha.png\n")],
+            ..case("missing alpha texture", &["cornell.mtl:13:", "nosuch-alpha.png"])
+        },
+        Case {
+            edits: &[("cornell.toml", "[materials.red]\n", "[materials.red]\nalpha_texture = \"gone-alpha.png\"\n")],
+            ..case("missing scene-file alpha texture", &["cornell.toml", "materials.red.alpha_texture", "gone-alpha.png"])
+        },
+        Case {
+            edits: &[("cornell.toml", "[materials.red]\n", "[materials.red]\nalpha_cutoff = 0.5\n")],
+            ..case("alpha cutoff without alpha texture", &["cornell.toml", "materials.red.alpha_cutoff", "no alpha texture"])
+        },
+        Case {
             edits: &[(
                 "cornell.toml",
                 "[materials.white]\n",

@@ -479,7 +479,7 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     let warnings = s.warnings.join("\n");
     for want in [
         "KHR_materials_clearcoat is not read",
-        "alphaMode Blend (material matte)",
+        "alphaMode BLEND (material matte): drawn as MASK with alphaCutoff 0.5",
         "mode Lines is not drawn",
         "no mesh has texture coordinates",
     ] {
@@ -495,6 +495,48 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     // Its scale multiplies the x and y of `2 c - 1` (glTF 2.0, 3.9.3).
     assert_eq!(normal.factor, Vec3::new(0.5, 0.5, 1.0));
     assert_eq!((s.camera.width, s.camera.height), (256, 256));
+}
+
+#[test]
+fn alpha_mask_cuts_at_the_cutoff_of_texture_alpha_times_factor_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Alpha 0 on the left column, 1 on the right.
+    image::RgbaImage::from_fn(2, 1, |x, _| image::Rgba([255, 255, 255, 255 * x as u8]))
+        .save(d.join("leaf.png"))
+        .unwrap();
+    let base = |alpha: f32, texture: bool| {
+        let mut b =
+            json!({"baseColorFactor": [1.0, 1.0, 1.0, alpha], "metallicFactor": 0.0, "roughnessFactor": 1.0});
+        if texture {
+            b["baseColorTexture"] = json!({"index": 0});
+        }
+        b
+    };
+    let materials = json!([
+        {"name": "leaf", "pbrMetallicRoughness": base(0.8, true), "alphaMode": "MASK", "alphaCutoff": 0.3},
+        {"name": "ghost", "pbrMetallicRoughness": base(0.2, false), "alphaMode": "MASK"},
+        {"name": "solid", "pbrMetallicRoughness": base(0.9, false), "alphaMode": "MASK"},
+        {"name": "blend", "pbrMetallicRoughness": base(1.0, true), "alphaMode": "BLEND"}
+    ]);
+    let extra = json!({"textures": [{"source": 0}], "images": [{"uri": "leaf.png"}]});
+    let s = triangles(d, "mask", materials, extra);
+    let maps = |n: &str| s.maps[s.material_names.iter().position(|m| m == n).unwrap()];
+    let leaf = maps("leaf").alpha.expect("MASK with a base colour texture is a cut-out");
+    assert_eq!((leaf.channel, leaf.factor, leaf.cutoff), (3, 0.8, 0.3));
+    let tex = &s.textures.list[leaf.texture.texture as usize];
+    assert!(!leaf.opaque(tex, glam::Vec2::new(0.25, 0.5)) && leaf.opaque(tex, glam::Vec2::new(0.75, 0.5)));
+    // 0.2 < the default cutoff 0.5: nothing is drawn; 0.9 passes everywhere: no cut-out.
+    assert!(maps("ghost").alpha.is_some() && maps("solid").alpha.is_none());
+    assert_eq!(maps("blend").alpha.map(|a| a.cutoff), Some(0.5));
+    let warnings = s.warnings.join("\n");
+    assert!(warnings.contains("baseColorFactor alpha 0.2 is below its alphaCutoff 0.5"), "{warnings}");
+    assert!(warnings.contains("alphaMode BLEND (material blend)"), "{warnings}");
+    // The fully transparent triangle is not hit; the others are cut-outs or opaque.
+    let cut = s.cutouts().expect("cut-outs");
+    let ghost = s.material_names.iter().position(|m| m == "ghost").unwrap() as u32;
+    let prim = s.tri_material.iter().position(|&m| m == ghost).unwrap() as u32;
+    assert!(cut.is_cutout(prim) && !cut.opaque(prim, 0.2, 0.2));
 }
 
 #[test]

@@ -122,7 +122,8 @@ fn caustic_flux(s: &Scene, accel: &AnyAccel, aim: bool, n: u64, seed: u64) -> (f
 #[test]
 fn aiming_keeps_the_caustic_estimate() {
     let s = scene("caustics");
-    let accel = AnyAccel::build(AccelKind::Bvh, &s.mesh, AccelOptions::default()).unwrap();
+    let accel =
+        AnyAccel::build(AccelKind::Bvh, &s.mesh, s.cutouts().as_ref(), AccelOptions::default()).unwrap();
     let lights = LightSet::new(&s.lights, &s.mesh, &s.tri_material, &s.materials);
     let acceptance = trace::target_acceptance(&lights, &trace::specular_targets(&s), 1 << 16, 1);
     let aimed_tries = (20_000.0 / acceptance).ceil() as u64;

@@ -16,6 +16,7 @@ pub mod naive;
 pub mod triangle;
 
 use crate::geometry::{MeshError, Ray, TriangleMesh};
+use std::sync::Arc;
 
 /// The first hit along a ray. The point is `(1 - u - v) v0 + u v1 + v v2` of triangle `prim`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,6 +73,66 @@ impl AccelKind {
     }
 }
 
+/// "Is triangle `prim` opaque at barycentrics `(u, v)`?" (the convention of [`Hit`]).
+pub type Opacity = dyn Fn(u32, f32, f32) -> bool + Send + Sync;
+
+/// Alpha cut-outs (leaves, fences): which triangles have a cut-out material, and a test of
+/// whether a point of one of them is opaque. Every backend treats a transparent point as if the
+/// triangle were not there, for closest hits and occlusion alike: Embree through intersection
+/// filter functions on a second geometry holding the cut-out triangles, the BVH and brute force
+/// by the same test after their triangle test. Without cut-outs (`None` to
+/// [`AnyAccel::build`]) no filter is installed and nothing is evaluated. Cheap to clone.
+#[derive(Clone)]
+pub struct Cutouts {
+    /// A bit per triangle: set if it has a cut-out material.
+    bits: Arc<[u64]>,
+    count: usize,
+    opaque: Arc<Opacity>,
+}
+
+impl Cutouts {
+    /// Cut-outs on the triangles `is_cutout` marks (one flag per triangle of the mesh), tested
+    /// by `opaque`, which is only called for marked triangles.
+    pub fn new(is_cutout: &[bool], opaque: Arc<Opacity>) -> Cutouts {
+        let mut bits = vec![0u64; is_cutout.len().div_ceil(64)];
+        for (i, _) in is_cutout.iter().enumerate().filter(|(_, &c)| c) {
+            bits[i / 64] |= 1 << (i % 64);
+        }
+        let count = is_cutout.iter().filter(|&&c| c).count();
+        Cutouts { bits: bits.into(), count, opaque }
+    }
+
+    /// Whether triangle `prim` has a cut-out material (false past the end).
+    #[inline]
+    pub fn is_cutout(&self, prim: u32) -> bool {
+        self.bits.get(prim as usize / 64).is_some_and(|w| w >> (prim % 64) & 1 != 0)
+    }
+
+    /// Number of triangles with a cut-out material.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+
+    /// Whether the point `(u, v)` of triangle `prim` stops rays: always for a triangle without
+    /// a cut-out, else as the opacity test says.
+    #[inline]
+    pub fn opaque(&self, prim: u32, u: f32, v: f32) -> bool {
+        !self.is_cutout(prim) || (self.opaque)(prim, u, v)
+    }
+
+    /// The opacity test alone (for triangles known to be cut-outs).
+    #[inline]
+    pub fn test(&self, prim: u32, u: f32, v: f32) -> bool {
+        (self.opaque)(prim, u, v)
+    }
+}
+
+impl std::fmt::Debug for Cutouts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Cutouts({} triangles)", self.count)
+    }
+}
+
 /// Options shared by the backends. The BVH's triangle test is always watertight, so `robust`
 /// only changes Embree (its `RTC_SCENE_FLAG_ROBUST`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,19 +167,28 @@ pub enum AnyAccel {
 }
 
 impl AnyAccel {
-    /// Validates the mesh and builds the requested backend (and only that one).
-    pub fn build(kind: AccelKind, mesh: &TriangleMesh, options: AccelOptions) -> Result<Self, AccelError> {
+    /// Validates the mesh and builds the requested backend (and only that one), with the
+    /// scene's alpha cut-outs if it has any (a [`Cutouts`] marking no triangle counts as none).
+    pub fn build(
+        kind: AccelKind,
+        mesh: &TriangleMesh,
+        cutouts: Option<&Cutouts>,
+        options: AccelOptions,
+    ) -> Result<Self, AccelError> {
         mesh.validate()?;
+        let cutouts = cutouts.filter(|c| c.count() > 0).cloned();
         match kind {
             #[cfg(feature = "embree")]
-            AccelKind::Embree => Ok(AnyAccel::Embree(embree::EmbreeAccel::build(mesh, options)?)),
+            AccelKind::Embree => {
+                Ok(AnyAccel::Embree(embree::EmbreeAccel::build_with_cutouts(mesh, cutouts, options)?))
+            }
             #[cfg(not(feature = "embree"))]
             AccelKind::Embree => {
                 let _ = options; // only Embree uses the options
                 Err(AccelError::EmbreeNotBuilt)
             }
-            AccelKind::Bvh => Ok(AnyAccel::Bvh(bvh::Bvh::build(mesh))),
-            AccelKind::Naive => Ok(AnyAccel::Naive(naive::Naive::new(mesh))),
+            AccelKind::Bvh => Ok(AnyAccel::Bvh(bvh::Bvh::build_with_cutouts(mesh, cutouts))),
+            AccelKind::Naive => Ok(AnyAccel::Naive(naive::Naive::with_cutouts(mesh, cutouts))),
         }
     }
 

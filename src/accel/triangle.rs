@@ -80,8 +80,14 @@ impl Hit4 {
     /// on the lanes in order with a shrinking interval would pick it.
     #[inline(always)]
     pub fn closest(&self) -> Option<usize> {
+        self.closest_in(self.mask)
+    }
+
+    /// [`Hit4::closest`] among the lanes of `mask` (a subset of [`Hit4::mask`]).
+    #[inline(always)]
+    pub fn closest_in(&self, mask: u32) -> Option<usize> {
         let mut best: Option<(usize, f32)> = None;
-        let mut m = self.mask;
+        let mut m = mask;
         while m != 0 {
             let i = m.trailing_zeros() as usize;
             m &= m - 1;

@@ -120,7 +120,9 @@ impl<'s> Prepared<'s> {
         let options = AccelOptions { robust: cfg.robust };
         let reason =
             format!("{:?} over {} triangles (the only ray caster built)", cfg.accel, scene.mesh.len());
-        let accel = stats.run("accel", reason, |_| AnyAccel::build(cfg.accel, &scene.mesh, options))?;
+        let accel = stats.run("accel", reason, |_| {
+            AnyAccel::build(cfg.accel, &scene.mesh, scene.cutouts().as_ref(), options)
+        })?;
         stats.accel = accel.name().to_string();
         let lights = stats.run("lights", "prepare emitters and light sampling", |_| {
             let portals = if cfg.portals { &scene.portals[..] } else { &[] };

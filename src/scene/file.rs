@@ -207,6 +207,11 @@ pub struct MaterialEntry {
     pub bump_texture: Option<std::path::PathBuf>,
     /// Scene units of height per unit of `bump_texture` (MTL `-bm`; default 1).
     pub bump_scale: Option<f32>,
+    /// An alpha cut-out mask (its alpha channel, or its red channel without one), replacing
+    /// the MTL's `map_d` and the glTF's MASK.
+    pub alpha_texture: Option<std::path::PathBuf>,
+    /// Where the alpha mask cuts (default 0.5): below it the surface is not there.
+    pub alpha_cutoff: Option<f32>,
 }
 
 /// `[[portal]]`: an opening distant lights send their photons through (see

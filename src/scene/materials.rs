@@ -6,7 +6,7 @@ use super::file::{nonneg3, reflectance3, MaterialEntry, MaterialKind, SceneFile}
 use super::obj::{relative_to, MtlMap, MtlMaterial};
 use super::SceneError;
 use crate::material::Material;
-use crate::texture::{Encoding, Textures, Wrap};
+use crate::texture::{Encoding, Texture, Textures, Wrap};
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -204,6 +204,41 @@ pub struct MaterialMaps {
     /// `map_Ke` / `ke_texture` / glTF `emissiveTexture`: multiplies an emissive material's `ke`
     /// (the emitted radiance is `ke` times the texel).
     pub ke: Option<TextureRef>,
+    /// `map_d` / `alpha_texture` / glTF `alphaMode` MASK: an alpha cut-out (see [`AlphaMap`]).
+    pub alpha: Option<AlphaMap>,
+}
+
+/// The MTL `map_d` and glTF `alphaCutoff` threshold when none is given.
+pub const DEFAULT_ALPHA_CUTOFF: f32 = 0.5;
+
+/// An alpha cut-out (leaves, fences): where a channel of the texture times `factor` is below
+/// `cutoff`, the surface is not there: camera rays, shadow rays and photons go through it (glTF
+/// `alphaMode` MASK). Only the coordinate transform and wrap of `texture` are used.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaMap {
+    pub texture: TextureRef,
+    /// The channel read: 3 (alpha), or 0 (red) for an MTL `map_d` image without alpha.
+    pub channel: usize,
+    /// The value's factor (glTF `baseColorFactor`'s alpha; 1 for MTL and the scene file).
+    pub factor: f32,
+    pub cutoff: f32,
+}
+
+impl AlphaMap {
+    /// Whether the surface is there at `uv`; `texture` is the one `self.texture` names.
+    #[inline]
+    pub fn opaque(&self, texture: &Texture, uv: Vec2) -> bool {
+        let t = &self.texture;
+        texture.channel(uv * t.scale + t.offset, t.wrap, self.channel) * self.factor >= self.cutoff
+    }
+
+    /// Whether every texel passes the threshold, so the cut-out cuts nothing and can be left out
+    /// (bilinear filtering never leaves the texels' range).
+    pub fn opaque_everywhere(&self, texture: &Texture) -> bool {
+        let (lo, hi) = texture.channel_range(self.channel);
+        let lowest = if self.factor >= 0.0 { lo * self.factor } else { hi * self.factor };
+        lowest >= self.cutoff
+    }
 }
 
 impl MaterialMaps {
@@ -296,6 +331,10 @@ fn texture_maps(
                     maps.bump = None;
                 }
             }
+            "map_d" => {
+                let t = from_mtl(map, textures, warnings, Encoding::Data)?;
+                maps.alpha = Some(alpha_map(t, textures, 1.0, DEFAULT_ALPHA_CUTOFF));
+            }
             other => warnings.push(format!(
                 "{}:{}: `{other}` (material {name}) is not rendered yet; the material is drawn without it",
                 map.mtl.display(),
@@ -334,6 +373,26 @@ fn texture_maps(
             maps.bump = Some(from_file("bump_texture", f, textures, Encoding::Data)?);
             maps.normal = None;
         }
+        if let Some(f) = &e.alpha_texture {
+            let t = from_file("alpha_texture", f, textures, Encoding::Data)?;
+            maps.alpha = Some(alpha_map(t, textures, 1.0, DEFAULT_ALPHA_CUTOFF));
+        }
+        if let Some(cutoff) = e.alpha_cutoff {
+            let field = format!("materials.{name}.alpha_cutoff");
+            if !(0.0..=1.0).contains(&cutoff) {
+                return Err(SceneError::field(path, field, format!("{cutoff} is not in [0, 1]")));
+            }
+            match maps.alpha.as_mut() {
+                Some(a) => a.cutoff = cutoff,
+                None => {
+                    return Err(SceneError::field(
+                        path,
+                        field,
+                        "the material has no alpha texture (alpha_texture, MTL map_d, glTF alphaMode MASK) to cut at",
+                    ))
+                }
+            }
+        }
         if let Some(scale) = e.bump_scale {
             let field = format!("materials.{name}.bump_scale");
             if !scale.is_finite() {
@@ -362,5 +421,17 @@ fn texture_maps(
             .push(format!("material {name}: a {kind} material emits nothing; its ke texture is not used"));
         maps.ke = None;
     }
+    if maps.alpha.is_some() && matches!(m, Material::Emissive { .. }) {
+        warnings.push(format!(
+            "material {name}: an emissive material's cut-out is seen by rays, but light leaves its transparent parts too"
+        ));
+    }
     Ok(maps)
+}
+
+/// The cut-out of texture reference `t`: its alpha channel, or its red channel (a grey mask) if
+/// the image has no alpha.
+pub fn alpha_map(t: TextureRef, textures: &Textures, factor: f32, cutoff: f32) -> AlphaMap {
+    let channel = if textures.get(t.texture).has_alpha() { 3 } else { 0 };
+    AlphaMap { texture: t, channel, factor, cutoff }
 }

@@ -6,6 +6,7 @@
 
 mod camera;
 mod cameras;
+mod cutouts;
 mod error;
 mod file;
 mod gltf;
@@ -19,7 +20,7 @@ pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
 };
-pub use materials::{MaterialMaps, TextureRef};
+pub use materials::{AlphaMap, MaterialMaps, TextureRef, DEFAULT_ALPHA_CUTOFF};
 pub use obj::{MtlMap, MtlMaterial};
 
 use crate::config::RenderSettings;
@@ -199,7 +200,10 @@ impl Scene {
         let resolved = materials::resolve(path, &tri_names, given, &file)?;
         let resolved_emits = resolved.materials.iter().any(|m| m.emission().max_element() > 0.0);
         warnings.extend(resolved.warnings);
-        let textured = resolved.maps.iter().any(|m| !m.is_empty() || m.normal.is_some() || m.bump.is_some());
+        let textured = resolved
+            .maps
+            .iter()
+            .any(|m| !m.is_empty() || m.normal.is_some() || m.bump.is_some() || m.alpha.is_some());
         if textured && !attributes.has_uvs() {
             warnings.push(
                 "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),

@@ -54,7 +54,7 @@ pub struct MaterialInfo {
     /// The constants, by their scene-file names (`kd`, `ks`, `ns`, `ior`, `ke`).
     #[serde(serialize_with = "as_map")]
     pub parameters: Vec<(&'static str, Vec<f32>)>,
-    /// The textures, by slot (`kd`, `ks`, `normal`, `bump`) and file.
+    /// The textures, by slot (`kd`, `ks`, `ke`, `normal`, `bump`, `alpha`) and file.
     #[serde(serialize_with = "as_map")]
     pub textures: Vec<(&'static str, String)>,
 }
@@ -132,7 +132,14 @@ impl SceneInfo {
             .zip(counts)
             .map(|(((name, m), maps), triangles)| {
                 let file = |t: TextureRef| scene.textures.get(t.texture).path.display().to_string();
-                let slots = [("kd", maps.kd), ("ks", maps.ks), ("normal", maps.normal), ("bump", maps.bump)];
+                let slots = [
+                    ("kd", maps.kd),
+                    ("ks", maps.ks),
+                    ("ke", maps.ke),
+                    ("normal", maps.normal),
+                    ("bump", maps.bump),
+                    ("alpha", maps.alpha.map(|a| a.texture)),
+                ];
                 let textures = slots.into_iter().filter_map(|(slot, t)| Some((slot, file(t?)))).collect();
                 let (kind, parameters) = material_parameters(m);
                 MaterialInfo { name: name.clone(), kind, triangles, parameters, textures }

@@ -26,6 +26,9 @@
 //!   [`WatertightRay::intersect4`], which performs the scalar test's operations in the same order
 //!   lane by lane, so results agree bit for bit with [`Naive`](super::naive::Naive) (which uses
 //!   the scalar [`WatertightRay::intersect`]).
+//! * **Cut-outs** ([`Cutouts`]): with them, a lane that hits a transparent point of a cut-out
+//!   triangle is dropped and the next closest lane of the packet tried, so the walk goes on to
+//!   farther triangles as if the triangle were not there. Without them the walk has no test.
 
 mod build;
 mod node;
@@ -33,7 +36,7 @@ mod node;
 pub use node::Node4;
 
 use super::triangle::{Tri4, TriHit, WatertightRay};
-use super::{Accel, Hit};
+use super::{Accel, Cutouts, Hit};
 use crate::geometry::{Aabb, Ray, TriangleMesh};
 use build::{Box3, PrimRef};
 use glam::{Vec3, Vec3A, Vec4};
@@ -62,6 +65,8 @@ pub struct Bvh {
     prim_ids: Vec<[u32; 4]>,
     /// Number of distinct triangles indexed.
     tri_count: usize,
+    /// Alpha cut-outs, tested after a lane's triangle test passes (`None`: no test at all).
+    cutouts: Option<Cutouts>,
 }
 
 /// A ray prepared for testing the four boxes of a node at once.
@@ -113,6 +118,12 @@ impl BoxRay {
 }
 
 impl Bvh {
+    /// [`Bvh::build`] with alpha cut-outs: a lane whose triangle test passes on a transparent
+    /// point of a cut-out triangle counts as a miss, and the walk goes on to farther triangles.
+    pub fn build_with_cutouts(mesh: &TriangleMesh, cutouts: Option<Cutouts>) -> Bvh {
+        Bvh { cutouts: cutouts.filter(|c| c.count() > 0), ..Bvh::build(mesh) }
+    }
+
     /// Builds the hierarchy (in parallel on the current rayon pool). Triangles of zero area or
     /// with non-finite corners are skipped; an empty mesh gives an empty BVH that hits nothing.
     pub fn build(mesh: &TriangleMesh) -> Bvh {
@@ -133,7 +144,7 @@ impl Bvh {
             Some(flat) => {
                 let tris =
                     flat.packets.par_iter().map(|ids| Tri4::new(&ids.map(|i| mesh.triangle(i)))).collect();
-                Bvh { nodes: flat.nodes, tris, prim_ids: flat.packets, tri_count }
+                Bvh { nodes: flat.nodes, tris, prim_ids: flat.packets, tri_count, cutouts: None }
             }
         };
         if cfg!(debug_assertions) {
@@ -354,17 +365,34 @@ impl Accel for Bvh {
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut best: Option<(usize, usize, TriHit)> = None;
-        self.traverse(ray, |p, tri, t_max| {
-            let h = wr.intersect4(tri, ray.t_min, t_max);
-            match h.closest() {
-                Some(lane) => {
-                    let hit = h.get(lane);
-                    best = Some((p, lane, hit));
-                    (hit.t, false)
+        // Two copies of the walk, so that a scene without cut-outs pays nothing for them.
+        match &self.cutouts {
+            None => self.traverse(ray, |p, tri, t_max| {
+                let h = wr.intersect4(tri, ray.t_min, t_max);
+                match h.closest() {
+                    Some(lane) => {
+                        let hit = h.get(lane);
+                        best = Some((p, lane, hit));
+                        (hit.t, false)
+                    }
+                    None => (t_max, false),
                 }
-                None => (t_max, false),
-            }
-        });
+            }),
+            Some(cut) => self.traverse(ray, |p, tri, t_max| {
+                let h = wr.intersect4(tri, ray.t_min, t_max);
+                // The closest lane on an opaque point; transparent lanes are dropped one by one.
+                let mut mask = h.mask;
+                while let Some(lane) = h.closest_in(mask) {
+                    let hit = h.get(lane);
+                    if cut.opaque(self.prim_ids[p][lane], hit.u, hit.v) {
+                        best = Some((p, lane, hit));
+                        return (hit.t, false);
+                    }
+                    mask &= !(1 << lane);
+                }
+                (t_max, false)
+            }),
+        }
         best.map(|(p, lane, h)| Hit { t: h.t, prim: self.prim_ids[p][lane], u: h.u, v: h.v })
     }
 
@@ -374,10 +402,26 @@ impl Accel for Bvh {
         }
         let wr = WatertightRay::new(ray.origin, ray.dir);
         let mut hit = false;
-        self.traverse(ray, |_, tri, t_max| {
-            hit = wr.intersect4(tri, ray.t_min, t_max).mask != 0;
-            (t_max, hit)
-        });
+        match &self.cutouts {
+            None => self.traverse(ray, |_, tri, t_max| {
+                hit = wr.intersect4(tri, ray.t_min, t_max).mask != 0;
+                (t_max, hit)
+            }),
+            Some(cut) => self.traverse(ray, |p, tri, t_max| {
+                let h = wr.intersect4(tri, ray.t_min, t_max);
+                let mut m = h.mask;
+                while m != 0 {
+                    let lane = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let th = h.get(lane);
+                    if cut.opaque(self.prim_ids[p][lane], th.u, th.v) {
+                        hit = true;
+                        break;
+                    }
+                }
+                (t_max, hit)
+            }),
+        }
         hit
     }
 }

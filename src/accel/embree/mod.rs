@@ -3,7 +3,8 @@
 //! This module wraps Embree's C API (`rtcore.h`): devices (`RTCDevice`, `device`), committed
 //! scenes with one shared-buffer triangle geometry (`RTCScene`, `scene`), single-ray queries
 //! (`rtcIntersect1` / `rtcOccluded1`) and 8-wide packets of closest-hit queries (`rtcIntersect8`,
-//! `packet`). The version differences live in `api`, the raw bindings in `sys`.
+//! `packet`), with alpha cut-outs as intersection filter functions on a second geometry
+//! (`scene`). The version differences live in `api`, the raw bindings in `sys`.
 //!
 //! All of the crate's `unsafe` code is in this module; every block states why it is sound.
 //!
@@ -22,7 +23,7 @@ mod sys;
 #[cfg(test)]
 mod tests;
 
-use super::{Accel, AccelError, AccelOptions, Hit};
+use super::{Accel, AccelError, AccelOptions, Cutouts, Hit};
 use crate::geometry::{Ray, TriangleMesh};
 use device::Device;
 use scene::Scene;
@@ -48,8 +49,18 @@ impl EmbreeAccel {
     /// quality with, if `options.robust`, `RTC_SCENE_FLAG_ROBUST`. An empty mesh gives an empty
     /// scene that every ray misses.
     pub fn build(mesh: &TriangleMesh, options: AccelOptions) -> Result<EmbreeAccel, AccelError> {
+        EmbreeAccel::build_with_cutouts(mesh, None, options)
+    }
+
+    /// [`EmbreeAccel::build`] with alpha cut-outs: the cut-out triangles get a geometry of
+    /// their own with intersection and occlusion filters (see [`Cutouts`]).
+    pub fn build_with_cutouts(
+        mesh: &TriangleMesh,
+        cutouts: Option<Cutouts>,
+        options: AccelOptions,
+    ) -> Result<EmbreeAccel, AccelError> {
         let device = Arc::new(Device::new(DEVICE_CONFIG)?);
-        let scene = Scene::commit(device, mesh, options)?;
+        let scene = Scene::commit(device, mesh, cutouts, options)?;
         Ok(EmbreeAccel { scene })
     }
 }

@@ -71,7 +71,7 @@ impl Scene {
                 let ray = &rays[lane];
                 *hit = (found && t >= ray.t_min && t <= ray.t_max && t.is_finite()).then(|| Hit {
                     t: rh.ray.tfar[lane],
-                    prim: rh.hit.primID[lane],
+                    prim: self.scene_prim(rh.hit.geomID[lane], rh.hit.primID[lane]),
                     u: rh.hit.u[lane],
                     v: rh.hit.v[lane],
                 });

@@ -2,6 +2,13 @@
 //! buffers are shared with Embree (`rtcSetSharedGeometryBuffer`) and owned by the scene, plus
 //! the single-ray queries `rtcIntersect1` / `rtcOccluded1`.
 //!
+//! **Cut-outs.** With [`Cutouts`], the triangles with a cut-out material go into a second
+//! geometry (ID 1, the others stay in ID 0) that has intersection and occlusion filter
+//! functions (`rtcSetGeometryIntersectFilterFunction` / `OccludedFilterFunction`): they reject
+//! (`valid[i] = 0`) every candidate hit on a transparent point, and Embree goes on looking. Each
+//! geometry keeps the scene triangle index of its primitives, so [`Hit::prim`] stays the mesh's.
+//! Without cut-outs there is one geometry, no filter and no index map.
+//!
 //! **Ray interval.** Embree accepts hits with `tnear <= t <= tfar`; the [`Accel`] contract is
 //! the open interval `(t_min, t_max)`. We pass `tnear = next_float_up(t_min)` and
 //! `tfar = next_float_down(t_max)`, the neighbouring floats, which makes the closed interval Embree
@@ -15,7 +22,7 @@
 use super::api::{Query, INVALID_ID};
 use super::device::Device;
 use super::sys;
-use crate::accel::{AccelError, AccelOptions, Hit};
+use crate::accel::{AccelError, AccelOptions, Cutouts, Hit};
 use crate::geometry::{next_float_down, next_float_up, Ray, TriangleMesh};
 use std::ffi::c_void;
 use std::sync::Arc;
@@ -27,10 +34,24 @@ pub struct Scene {
     /// Vertex positions as `[x, y, z, 0]`: 16-byte records, so the last vertex can be read with
     /// a 16-byte load as Embree requires of vertex buffers. Read by Embree; never touched again.
     vertices: Vec<[f32; 4]>,
-    /// Triangle indices, three per triangle, plus one padding element for the same rule.
+    /// Triangle indices, three per triangle, plus one padding element for the same rule
+    /// (the triangles without a cut-out if there are cut-outs).
     indices: Vec<u32>,
+    /// With cut-outs, the scene triangle of each primitive of geometry 0; empty: the identity.
+    opaque_prims: Vec<u32>,
+    /// With cut-outs, geometry 1's indices (as `indices`), its triangles and the opacity
+    /// test; its address is the geometry's user pointer, read by [`cutout_filter`].
+    filter: Option<Box<FilterData>>,
     /// Dropped after the scene is released (field order), keeping the device alive until then.
     device: Arc<Device>,
+}
+
+/// What the filter functions of the cut-out geometry read (through its user pointer).
+struct FilterData {
+    indices: Vec<u32>,
+    /// The scene triangle of each primitive of the cut-out geometry.
+    prims: Vec<u32>,
+    cutouts: Cutouts,
 }
 
 // SAFETY: a committed Embree scene is documented as safe to query (rtcIntersect*/rtcOccluded*)
@@ -51,6 +72,7 @@ impl Scene {
     pub fn commit(
         device: Arc<Device>,
         mesh: &TriangleMesh,
+        cutouts: Option<Cutouts>,
         options: AccelOptions,
     ) -> Result<Self, AccelError> {
         mesh.validate()?;
@@ -61,12 +83,29 @@ impl Scene {
             return Err(AccelError::Embree("rtcNewScene returned null".into()));
         }
         let mut vertices: Vec<[f32; 4]> = mesh.positions.iter().map(|p| [p.x, p.y, p.z, 0.0]).collect();
-        let mut indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
-        indices.push(0);
         vertices.shrink_to_fit();
-        indices.shrink_to_fit();
+        let packed = |prims: &[u32]| {
+            let mut ix: Vec<u32> = prims.iter().flat_map(|&p| mesh.indices[p as usize]).collect();
+            ix.push(0);
+            ix.shrink_to_fit();
+            ix
+        };
+        let (indices, opaque_prims, filter) = match cutouts.filter(|c| c.count() > 0) {
+            None => {
+                let mut indices: Vec<u32> = mesh.indices.iter().flatten().copied().collect();
+                indices.push(0);
+                indices.shrink_to_fit();
+                (indices, Vec::new(), None)
+            }
+            Some(cutouts) => {
+                let (cut, opaque): (Vec<u32>, Vec<u32>) =
+                    (0..mesh.len() as u32).partition(|&p| cutouts.is_cutout(p));
+                let data = FilterData { indices: packed(&cut), prims: cut, cutouts };
+                (packed(&opaque), opaque, Some(Box::new(data)))
+            }
+        };
         // From here on, `Drop` releases the scene if anything fails.
-        let scene = Scene { raw, vertices, indices, device };
+        let scene = Scene { raw, vertices, indices, opaque_prims, filter, device };
         let flags = if options.robust { sys::RTC_SCENE_FLAG_ROBUST } else { sys::RTC_SCENE_FLAG_NONE };
         // SAFETY: `raw` is a live, not yet committed scene.
         unsafe {
@@ -74,8 +113,12 @@ impl Scene {
             sys::rtcSetSceneBuildQuality(raw, QUALITY);
         }
         scene.device.check("scene flags and build quality")?;
-        if !mesh.is_empty() {
-            scene.attach_triangles(mesh.positions.len(), mesh.len())?;
+        let opaque_count = (scene.indices.len() - 1) / 3;
+        if opaque_count > 0 {
+            scene.attach_triangles(mesh.positions.len(), &scene.indices, None)?;
+        }
+        if let Some(data) = &scene.filter {
+            scene.attach_triangles(mesh.positions.len(), &data.indices, Some(data))?;
         }
         // SAFETY: `raw` is live and its geometry's buffers are owned by `scene`.
         unsafe { sys::rtcCommitScene(raw) };
@@ -83,8 +126,16 @@ impl Scene {
         Ok(scene)
     }
 
-    /// Creates the triangle geometry over the scene's own buffers and attaches it.
-    fn attach_triangles(&self, vertex_count: usize, triangle_count: usize) -> Result<(), AccelError> {
+    /// Creates a triangle geometry over the scene's vertices and `indices` (owned by `self`, three
+    /// per triangle plus one padding element) and attaches it: as geometry 0 without `filter`, as
+    /// geometry 1 with `filter` as its user data and the cut-out filter functions.
+    fn attach_triangles(
+        &self,
+        vertex_count: usize,
+        indices: &[u32],
+        filter: Option<&FilterData>,
+    ) -> Result<(), AccelError> {
+        let triangle_count = (indices.len() - 1) / 3;
         let device = &self.device;
         // SAFETY: the device is live.
         let geom = unsafe { sys::rtcNewGeometry(device.raw(), sys::RTC_GEOMETRY_TYPE_TRIANGLE) };
@@ -97,6 +148,9 @@ impl Scene {
         // the vertex buffer holds `vertex_count` 16-byte records (readable with 16-byte loads),
         // the index buffer `3 * triangle_count` u32s plus padding, all indices < vertex_count
         // (validated mesh). Attaching takes a reference, so our release leaves the scene's.
+        // The filter data is boxed and owned by `self` (its address is stable and outlives the
+        // scene, which is released before the fields drop); `cutout_filter` only reads it and
+        // never unwinds.
         unsafe {
             sys::rtcSetSharedGeometryBuffer(
                 geom,
@@ -113,7 +167,7 @@ impl Scene {
                 sys::RTC_BUFFER_TYPE_INDEX,
                 0,
                 sys::RTC_FORMAT_UINT3,
-                self.indices.as_ptr() as *const c_void,
+                indices.as_ptr() as *const c_void,
                 0,
                 3 * std::mem::size_of::<u32>(),
                 triangle_count,
@@ -121,11 +175,26 @@ impl Scene {
             // Embree 4's default geometry mask is 1 (Embree 3's all ones): set it explicitly.
             sys::rtcSetGeometryMask(geom, u32::MAX);
             sys::rtcSetGeometryBuildQuality(geom, QUALITY);
+            if let Some(data) = filter {
+                sys::rtcSetGeometryUserData(geom, data as *const FilterData as *mut c_void);
+                sys::rtcSetGeometryIntersectFilterFunction(geom, Some(cutout_filter));
+                sys::rtcSetGeometryOccludedFilterFunction(geom, Some(cutout_filter));
+            }
             sys::rtcCommitGeometry(geom);
-            sys::rtcAttachGeometry(self.raw, geom);
+            sys::rtcAttachGeometryByID(self.raw, geom, u32::from(filter.is_some()));
             sys::rtcReleaseGeometry(geom);
         }
         device.check("triangle geometry")
+    }
+
+    /// The scene triangle of primitive `prim` of geometry `geom` (as Embree reports a hit).
+    #[inline]
+    pub fn scene_prim(&self, geom: u32, prim: u32) -> u32 {
+        match &self.filter {
+            None => prim,
+            Some(data) if geom == 1 => data.prims[prim as usize],
+            Some(_) => self.opaque_prims[prim as usize],
+        }
     }
 
     /// The raw handle of this committed scene, valid as long as `self` lives.
@@ -139,10 +208,15 @@ impl Scene {
         let mut rh = sys::RTCRayHit { ray: to_rtc_ray(ray, tnear, tfar), hit: empty_hit() };
         // SAFETY: `self.raw` is a live committed scene.
         unsafe { Query::new(false).intersect1(self.raw, &mut rh) };
-        let hit = Hit { t: rh.ray.tfar, prim: rh.hit.primID, u: rh.hit.u, v: rh.hit.v };
         // A hit outside the ray's interval (never seen; Embree promises none) is dropped.
-        let inside = hit.t >= ray.t_min && hit.t <= ray.t_max && hit.t.is_finite();
-        (rh.hit.geomID != INVALID_ID && inside).then_some(hit)
+        let t = rh.ray.tfar;
+        let inside = t >= ray.t_min && t <= ray.t_max && t.is_finite();
+        (rh.hit.geomID != INVALID_ID && inside).then(|| Hit {
+            t,
+            prim: self.scene_prim(rh.hit.geomID, rh.hit.primID),
+            u: rh.hit.u,
+            v: rh.hit.v,
+        })
     }
 
     /// Whether anything is hit in `(t_min, t_max)` (`rtcOccluded1` sets `tfar` to -inf then).
@@ -153,6 +227,39 @@ impl Scene {
         unsafe { Query::new(false).occluded1(self.raw, &mut r) };
         r.tfar == f32::NEG_INFINITY
     }
+}
+
+/// The intersection and occlusion filter of the cut-out geometry: rejects (`valid[i] = 0`) each
+/// active candidate hit on a transparent point. Never unwinds into Embree: a panic of the
+/// opacity test is caught and leaves the hit in place (the triangle counts as opaque there).
+unsafe extern "C" fn cutout_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    let run = std::panic::AssertUnwindSafe(|| {
+        // SAFETY: Embree passes valid arguments for the duration of the call: `valid` holds `N`
+        // ints, `hit` is an `RTCHitN` of `N` lanes (structure of arrays: Ng x, y, z, then u, v,
+        // primID, geomID, ... as `RTCHitN_u` etc. in rtcore_ray.h index it), and the user
+        // pointer is the `FilterData` that `attach_triangles` set, alive as long as the scene.
+        unsafe {
+            let args = &*args;
+            let n = args.N as usize;
+            let data = &*(args.geometryUserPtr as *const FilterData);
+            let valid = std::slice::from_raw_parts_mut(args.valid, n);
+            let floats = args.hit as *const f32;
+            let uints = args.hit as *const u32;
+            for (i, lane) in valid.iter_mut().enumerate() {
+                if *lane != -1 {
+                    continue;
+                }
+                let (u, v) = (*floats.add(3 * n + i), *floats.add(4 * n + i));
+                let prim = *uints.add(5 * n + i);
+                if let Some(&p) = data.prims.get(prim as usize) {
+                    if !data.cutouts.test(p, u, v) {
+                        *lane = 0;
+                    }
+                }
+            }
+        }
+    });
+    let _ = std::panic::catch_unwind(run);
 }
 
 impl Drop for Scene {

@@ -13,15 +13,17 @@
 //! | metallic < 0.5, roughness ≥ 0.5 | `diffuse`, `kd` = base colour |
 //!
 //! `ns` is clamped to [0, 10⁴]. The base colour is `baseColorFactor × baseColorTexture` (the
-//! factor rides on the texture reference). Textures not rendered are named in the warnings.
+//! factor rides on the texture reference). `alphaMode` MASK is an alpha cut-out at
+//! `alphaCutoff` of the base colour's alpha (texture alpha × factor alpha); BLEND is drawn as
+//! MASK at 0.5, warned. Textures not rendered are named in the warnings.
 
-use super::super::materials::{MaterialMaps, TextureRef};
+use super::super::materials::{AlphaMap, MaterialMaps, TextureRef, DEFAULT_ALPHA_CUTOFF};
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
 use super::data::{at, uri_bytes, Buffers};
 use super::Warnings;
 use crate::texture::{Encoding, Texture, Textures, Wrap};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use gltf::texture::WrappingMode;
 use std::collections::HashMap;
 use std::path::Path;
@@ -208,13 +210,43 @@ pub fn material(
                 .say(format!("{what} {name}"), format!("{field}.{what} (material {name}) is not rendered"));
         }
     }
-    match m.alpha_mode() {
-        gltf::material::AlphaMode::Opaque => {}
-        mode => warnings.say(
-            format!("alpha {name}"),
-            format!("{field}.alphaMode {mode:?} (material {name}): cut-outs and blending are not implemented yet; drawn opaque"),
-        ),
-    }
+    let cutoff = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => None,
+        gltf::material::AlphaMode::Mask => {
+            let c = m.alpha_cutoff().unwrap_or(DEFAULT_ALPHA_CUTOFF);
+            if !(c.is_finite() && c >= 0.0) {
+                return Err(at(
+                    path,
+                    format!("{field}.alphaCutoff"),
+                    format!("{c} is not a finite number >= 0"),
+                ));
+            }
+            Some(c)
+        }
+        gltf::material::AlphaMode::Blend => {
+            warnings.say(
+                format!("alpha {name}"),
+                format!("{field}.alphaMode BLEND (material {name}): drawn as MASK with alphaCutoff 0.5 (a cut-out; blending is not implemented)"),
+            );
+            Some(DEFAULT_ALPHA_CUTOFF)
+        }
+    };
+    // The cut-out: base colour alpha (its texture's alpha channel, 1 without) times the factor's.
+    let alpha_map = match (cutoff, base_map) {
+        (None, _) => None,
+        (Some(cutoff), Some(t)) => Some(AlphaMap { texture: t, channel: 3, factor: alpha, cutoff }),
+        (Some(cutoff), None) if alpha >= cutoff => None,
+        (Some(cutoff), None) => {
+            warnings.say(
+                format!("invisible {name}"),
+                format!("material {name}: baseColorFactor alpha {alpha} is below its alphaCutoff {cutoff}: the surface is not drawn"),
+            );
+            let texel =
+                Texture::from_linear(Path::new(&format!("{name} (alpha {alpha})")), 1, 1, vec![Vec4::W]);
+            let t = TextureRef::plain(images.textures.push(texel));
+            Some(AlphaMap { texture: t, channel: 3, factor: alpha, cutoff })
+        }
+    };
     let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
     if m.transmission().is_some_and(|t| t.transmission_texture().is_some()) {
         warnings.say(
@@ -223,7 +255,7 @@ pub fn material(
         );
     }
     let mut mtl = MtlMaterial::default();
-    let mut maps = MaterialMaps { normal, ..MaterialMaps::default() };
+    let mut maps = MaterialMaps { normal, alpha: alpha_map, ..MaterialMaps::default() };
     let unit = |v: Vec3| v.clamp(Vec3::ZERO, Vec3::ONE).to_array();
     if ke.max_element() > 0.0 {
         mtl.ke = Some(ke.to_array());

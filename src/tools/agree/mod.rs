@@ -8,9 +8,12 @@
 //! difference. Watertight triangle tests may legitimately differ where a ray passes within
 //! rounding distance of an edge or vertex, or where two triangles are hit at the same distance;
 //! such differences are counted as [`edge_ties`](AgreeReport::edge_ties), everything else is a
-//! real disagreement.
+//! real disagreement. With alpha cut-outs ([`compare_with_cutouts`]), so is a difference on a
+//! ray that crosses a cut-out triangle within rounding of where its opacity flips
+//! ([`near_cutout_edge`]): the backends' barycentrics differ in their last bits.
 
-use crate::accel::{Accel, Hit};
+use crate::accel::triangle::WatertightRay;
+use crate::accel::{Accel, Cutouts, Hit};
 use crate::geometry::{Ray, TriangleMesh, Vec3};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -25,6 +28,8 @@ pub use rays::{generate_rays, CameraLike, RayKind};
 pub const TIE_ULPS: f32 = 64.0;
 /// Barycentric coordinates below this count as "on the edge" whatever the triangle's size.
 pub const TIE_BARYCENTRIC: f32 = 1e-5;
+/// A cut-out's opacity changing within this barycentric step of a hit makes the hit a tie.
+pub const TIE_CUTOUT: f32 = 1e-4;
 
 /// Disagreement counts over a set of rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
@@ -134,6 +139,30 @@ pub fn ambiguous(mesh: &TriangleMesh, ray: Option<&Ray>, hit: &Hit) -> bool {
         })
 }
 
+/// Whether the opacity of cut-out triangle `prim` changes within [`TIE_CUTOUT`] of `(u, v)`
+/// (probed a step either way along `u` and `v`): which side a backend sees is rounding. False
+/// for a triangle without a cut-out.
+pub fn near_cutout_edge(cutouts: &Cutouts, prim: u32, u: f32, v: f32) -> bool {
+    if !cutouts.is_cutout(prim) {
+        return false;
+    }
+    let here = cutouts.test(prim, u, v);
+    let d = TIE_CUTOUT;
+    [(d, 0.0), (-d, 0.0), (0.0, d), (0.0, -d)]
+        .iter()
+        .any(|&(du, dv)| cutouts.test(prim, u + du, v + dv) != here)
+}
+
+/// Whether `ray` crosses some cut-out triangle (opaque or not) within rounding of where its
+/// opacity flips ([`near_cutout_edge`]), by brute force over the cut-out triangles.
+pub fn cutout_ambiguous(mesh: &TriangleMesh, cutouts: &Cutouts, ray: &Ray) -> bool {
+    let wr = WatertightRay::new(ray.origin, ray.dir);
+    (0..mesh.len() as u32).filter(|&p| cutouts.is_cutout(p)).any(|p| {
+        let [a, b, c] = mesh.triangle(p);
+        wr.intersect(a, b, c, ray.t_min, ray.t_max).is_some_and(|h| near_cutout_edge(cutouts, p, h.u, h.v))
+    })
+}
+
 /// Classifies the closest hits `a` and `b` of one ray.
 pub fn classify(mesh: &TriangleMesh, a: Option<Hit>, b: Option<Hit>) -> Verdict {
     classify_ray(mesh, None, a, b)
@@ -173,6 +202,19 @@ pub fn classify_ray(mesh: &TriangleMesh, ray: Option<&Ray>, a: Option<Hit>, b: O
 /// differing occlusion answer is a tie when the occluding backend's closest hit is
 /// [`ambiguous`], and a disagreement otherwise.
 pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &TriangleMesh) -> AgreeReport {
+    compare_with_cutouts(a, b, rays, mesh, None)
+}
+
+/// [`compare`] of two backends built with `cutouts`: a difference on a ray that
+/// [`cutout_ambiguous`] finds ambiguous is a tie too.
+pub fn compare_with_cutouts(
+    a: &dyn Accel,
+    b: &dyn Accel,
+    rays: &[(RayKind, Ray)],
+    mesh: &TriangleMesh,
+    cutouts: Option<&Cutouts>,
+) -> AgreeReport {
+    let alpha_tie = |ray: &Ray| cutouts.is_some_and(|c| cutout_ambiguous(mesh, c, ray));
     let empty = || [KindReport::default(); 5];
     let per = rays
         .par_iter()
@@ -180,7 +222,10 @@ pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &Tri
             let r = &mut acc[*kind as usize];
             r.rays += 1;
             let (ha, hb) = (a.intersect(ray), b.intersect(ray));
-            let verdict = classify_ray(mesh, Some(ray), ha, hb);
+            let mut verdict = classify_ray(mesh, Some(ray), ha, hb);
+            if matches!(verdict, Verdict::HitMiss | Verdict::Primitive) && alpha_tie(ray) {
+                verdict = Verdict::EdgeTie;
+            }
             match verdict {
                 Verdict::Agree { rel_dt } => r.max_rel_dt = r.max_rel_dt.max(rel_dt.unwrap_or(0.0)),
                 Verdict::HitMiss => r.hit_miss_disagreements += 1,
@@ -190,7 +235,7 @@ pub fn compare(a: &dyn Accel, b: &dyn Accel, rays: &[(RayKind, Ray)], mesh: &Tri
             let (oa, ob) = (a.occluded(ray), b.occluded(ray));
             if oa != ob {
                 let occluder = if oa { ha } else { hb };
-                if occluder.is_some_and(|h| ambiguous(mesh, Some(ray), &h)) {
+                if occluder.is_some_and(|h| ambiguous(mesh, Some(ray), &h)) || alpha_tie(ray) {
                     r.edge_ties += u64::from(verdict != Verdict::EdgeTie);
                 } else {
                     r.occlusion_disagreements += 1;
@@ -220,11 +265,12 @@ pub fn compare_with_reference(
     reference: Option<&dyn Accel>,
     rays: &[(RayKind, Ray)],
     mesh: &TriangleMesh,
+    cutouts: Option<&Cutouts>,
 ) -> Vec<AgreeReport> {
-    let mut out = vec![compare(a, b, rays, mesh)];
+    let mut out = vec![compare_with_cutouts(a, b, rays, mesh, cutouts)];
     if let Some(r) = reference {
-        out.push(compare(a, r, rays, mesh));
-        out.push(compare(b, r, rays, mesh));
+        out.push(compare_with_cutouts(a, r, rays, mesh, cutouts));
+        out.push(compare_with_cutouts(b, r, rays, mesh, cutouts));
     }
     out
 }
@@ -339,7 +385,7 @@ impl fmt::Display for SceneAgreement {
 }
 
 /// Casts `n` rays of every kind through the backends built for `scene` (camera rays from its
-/// camera) and compares them.
+/// camera), with its alpha cut-outs, and compares them.
 pub fn agree_scene(
     scene: &crate::scene::Scene,
     n: usize,
@@ -348,12 +394,13 @@ pub fn agree_scene(
 ) -> Result<SceneAgreement, crate::accel::AccelError> {
     let eye = scene.camera.eye;
     let camera = CameraLike { eye, target: eye + scene.camera.forward };
-    agree_mesh(&scene.mesh, Some(camera), n, seed, options, NAIVE_BUDGET)
+    agree_mesh(&scene.mesh, scene.cutouts().as_ref(), Some(camera), n, seed, options, NAIVE_BUDGET)
 }
 
 /// [`agree_scene`] on a mesh, with brute force held to `budget` triangles × rays.
 fn agree_mesh(
     mesh: &TriangleMesh,
+    cutouts: Option<&Cutouts>,
     camera: Option<CameraLike>,
     n: usize,
     seed: u64,
@@ -364,14 +411,14 @@ fn agree_mesh(
     mesh.validate()?;
     let rays = generate_rays(mesh, camera, n, seed);
     let generated_rays = rays.len() as u64;
-    let bvh = Bvh::build(mesh);
+    let bvh = Bvh::build_with_cutouts(mesh, cutouts.cloned());
     #[cfg(feature = "embree")]
     {
         let naive_ok = mesh.len() as u64 * rays.len() as u64 <= budget;
-        let naive = naive_ok.then(|| Naive::new(mesh));
-        let embree = crate::accel::embree::EmbreeAccel::build(mesh, options)?;
-        let mut reports =
-            compare_with_reference(&embree, &bvh, naive.as_ref().map(|n| n as &dyn Accel), &rays, mesh);
+        let naive = naive_ok.then(|| Naive::with_cutouts(mesh, cutouts.cloned()));
+        let embree = crate::accel::embree::EmbreeAccel::build_with_cutouts(mesh, cutouts.cloned(), options)?;
+        let naive = naive.as_ref().map(|n| n as &dyn Accel);
+        let mut reports = compare_with_reference(&embree, &bvh, naive, &rays, mesh, cutouts);
         let main = reports.remove(0);
         Ok(SceneAgreement { main, against_naive: reports, generated_rays })
     }
@@ -379,7 +426,9 @@ fn agree_mesh(
     {
         let _ = options;
         // Never the BVH against itself: brute force, on as many of the rays as the budget allows.
-        let main = compare(&bvh, &Naive::new(mesh), &within_budget(&rays, mesh.len(), budget), mesh);
+        let naive = Naive::with_cutouts(mesh, cutouts.cloned());
+        let main =
+            compare_with_cutouts(&bvh, &naive, &within_budget(&rays, mesh.len(), budget), mesh, cutouts);
         Ok(SceneAgreement { main, against_naive: Vec::new(), generated_rays })
     }
 }

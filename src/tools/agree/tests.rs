@@ -131,7 +131,7 @@ fn scene_agreement_never_compares_a_backend_with_itself() {
     let m = tri(1.0);
     let options = crate::accel::AccelOptions::default();
     for budget in [NAIVE_BUDGET, 2 * 100] {
-        let r = agree_mesh(&m, None, 1000, 9, options, budget).unwrap();
+        let r = agree_mesh(&m, None, None, 1000, 9, options, budget).unwrap();
         assert_ne!(r.main.backends[0], r.main.backends[1], "{r}");
         assert_eq!(r.generated_rays, 1000);
         assert!(r.ran() && r.clean(), "{r}");
@@ -142,7 +142,7 @@ fn scene_agreement_never_compares_a_backend_with_itself() {
         }
     }
     if cfg!(not(feature = "embree")) {
-        let r = agree_mesh(&m, None, 1000, 9, options, 1).unwrap();
+        let r = agree_mesh(&m, None, None, 1000, 9, options, 1).unwrap();
         assert!(!r.ran() && !r.clean(), "{r}");
         assert!(r.to_string().contains("not run"), "{r}");
     }
