@@ -376,3 +376,45 @@ fn an_unused_material_and_a_scene_without_light_are_warned() {
         }
     }
 }
+
+/// An MTL as Blender writes it by default (`Kd 0.8`, `Ks 0.5`, `illum 2`) renders, its Kd and
+/// Ks scaled to conserve energy with a warning naming the MTL line; `d 0.3` and `illum 9` are
+/// warned as not rendered as written.
+#[test]
+fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib t2.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 0 2\nv 1 0 2\n\
+               usemtl white\nf 1 3 2\nf 1 4 3\nusemtl odd\nf 4 6 3\nf 4 5 6\n";
+    let mtl =
+        "# Blender MTL File\nnewmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.800000 0.800000 0.800000\n\
+               Ks 0.500000 0.500000 0.500000\nKe 0.0 0.0 0.0\nNi 1.45\nd 1.0\nillum 2\n\n\
+               newmtl odd\nKd 0.5 0.5 0.5\nd 0.3\nillum 9\n";
+    let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
+                [[mesh]]\nobj = \"t2.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
+    std::fs::write(dir.path().join("t2.obj"), obj).unwrap();
+    std::fs::write(dir.path().join("t2.mtl"), mtl).unwrap();
+    std::fs::write(dir.path().join("t2.toml"), toml).unwrap();
+    let out = photonmap()
+        .current_dir(dir.path())
+        .args(["render", "t2.toml", "--quiet", "--spp", "1", "--photons", "1000"])
+        .output()
+        .unwrap();
+    let err = text(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(dir.path().join("t2.exr").exists());
+    assert!(
+        err.contains("t2.mtl:6: material white: Kd 0.8 + Ks 0.5 exceeds 1; both scaled by 0.769"),
+        "{err}"
+    );
+    assert!(err.contains("Kd 0.61538464, Ks 0.3846154") || err.contains("(Kd 0.615"), "{err}");
+    assert!(err.contains("t2.mtl:14: material odd: d 0.3 (dissolve) is not rendered"), "{err}");
+    assert!(err.contains("t2.mtl:15: material odd: illum 9 is not a model"), "{err}");
+    // The scaled material reflects what it receives at most.
+    let info = run(&["info", "--json", dir.path().join("t2.toml").to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();
+    let white = v["materials"].as_array().unwrap().iter().find(|m| m["name"] == "white").unwrap();
+    assert_eq!(white["type"], "glossy");
+    let kd = white["parameters"]["kd"][0].as_f64().unwrap();
+    let ks = white["parameters"]["ks"][0].as_f64().unwrap();
+    assert!((kd + ks - 1.0).abs() < 1e-5 && (kd / ks - 1.6).abs() < 1e-4, "kd {kd} ks {ks}");
+}

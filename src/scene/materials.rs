@@ -58,7 +58,7 @@ pub fn resolve(
                     None => (Material::Diffuse { kd: Vec3::splat(0.8) }, MaterialMaps::default()),
                     Some(n) => {
                         let (m, e) = (mtl.get(n), file.materials.get(n));
-                        let material = material(path, n, m, e)?;
+                        let material = material(path, n, m, e, &mut warnings)?;
                         let preset = preset.get(n).copied().unwrap_or_default();
                         let textured =
                             texture_maps(path, n, &material, preset, m, e, &mut textures, &mut warnings)?;
@@ -84,6 +84,7 @@ fn material(
     name: &str,
     mtl: Option<&MtlMaterial>,
     entry: Option<&MaterialEntry>,
+    warnings: &mut Vec<String>,
 ) -> Result<Material, SceneError> {
     if mtl.is_none() && entry.is_none() {
         return Err(SceneError::field(
@@ -93,6 +94,9 @@ fn material(
         ));
     }
     let empty = MtlMaterial::default();
+    if let Some(m) = mtl {
+        mtl_warnings(name, m, entry.is_some_and(|e| e.kind.is_some()), warnings);
+    }
     let mtl = mtl.unwrap_or(&empty);
     let none = MaterialEntry::default();
     let e = entry.unwrap_or(&none);
@@ -113,10 +117,31 @@ fn material(
     let m = match kind {
         MaterialKind::Diffuse => Material::Diffuse { kd: reflectance3(path, &field("kd"), kd)? },
         MaterialKind::Glossy => {
-            let kd = reflectance3(path, &field("kd"), kd)?;
-            let ks = reflectance3(path, &field("ks"), ks)?;
-            if (kd + ks).max_element() > 1.0 {
-                return Err(SceneError::field(path, field("ks"), "kd + ks exceeds 1: not energy conserving"));
+            let mut kd = reflectance3(path, &field("kd"), kd)?;
+            let mut ks = reflectance3(path, &field("ks"), ks)?;
+            let sum = (kd + ks).max_element();
+            if sum > 1.0 {
+                if e.kd.is_some() || e.ks.is_some() {
+                    return Err(SceneError::field(
+                        path,
+                        field("ks"),
+                        "kd + ks exceeds 1: not energy conserving",
+                    ));
+                }
+                // Blender's default export (`Kd 0.8`, `Ks 0.5`, `illum 2`): both are scaled so
+                // that the surface reflects no more than it receives.
+                let at = mtl_at(mtl, "Ks");
+                let v = |x: Vec3| if x.x == x.y && x.y == x.z { format!("{}", x.x) } else { format!("{x}") };
+                let (kd0, ks0) = (kd, ks);
+                (kd, ks) = (kd / sum, ks / sum);
+                warnings.push(format!(
+                    "{at}material {name}: Kd {} + Ks {} exceeds 1; both scaled by {:.3} to conserve energy (Kd {}, Ks {})",
+                    v(kd0),
+                    v(ks0),
+                    1.0 / sum,
+                    v(kd),
+                    v(ks)
+                ));
             }
             let ns =
                 e.ns.or(mtl.ns).ok_or_else(|| SceneError::field(path, field("ns"), "glossy needs ns"))?;
@@ -142,6 +167,29 @@ fn material(
         },
     };
     Ok(m)
+}
+
+/// `file:line: ` of statement `keyword` of an MTL material (empty when it has none).
+fn mtl_at(mtl: &MtlMaterial, keyword: &str) -> String {
+    mtl.lines.get(keyword).map_or(String::new(), |line| format!("{}:{line}: ", mtl.file.display()))
+}
+
+/// Warnings for what an MTL material says that is not rendered as written: a dissolve `d`
+/// below 1 (no blending: drawn opaque) and, unless the scene file gives the material's `type`
+/// (`typed`), an `illum` model outside 0..=7 (read as diffuse).
+fn mtl_warnings(name: &str, mtl: &MtlMaterial, typed: bool, warnings: &mut Vec<String>) {
+    if let Some(d) = mtl.dissolve.filter(|&d| d < 1.0) {
+        warnings.push(format!(
+            "{}material {name}: d {d} (dissolve) is not rendered: drawn opaque (map_d cut-outs are)",
+            mtl_at(mtl, "d")
+        ));
+    }
+    if let Some(illum) = mtl.illum.filter(|&i| i > 7 && !typed) {
+        warnings.push(format!(
+            "{}material {name}: illum {illum} is not a model photonmap renders: read as diffuse (Kd)",
+            mtl_at(mtl, "illum")
+        ));
+    }
 }
 
 /// The MTL mapping: `Ke` → emissive; `illum 3/5` → mirror; `illum 4/6/7` → glass; `illum 2`

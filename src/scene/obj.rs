@@ -19,6 +19,12 @@ pub struct MtlMaterial {
     pub illum: Option<u8>,
     /// The texture maps (`map_Kd`, `bump`, ...) in file order.
     pub maps: Vec<MtlMap>,
+    /// `d` (dissolve), as written.
+    pub dissolve: Option<f32>,
+    /// The MTL file, and the line of each numeric statement (`Kd`, `Ks`, `d`, `illum`, …;
+    /// the last if repeated), for messages.
+    pub file: PathBuf,
+    pub lines: HashMap<String, usize>,
 }
 
 /// One texture statement of an MTL file: `map_Kd -s 2 2 wood.png`.
@@ -66,7 +72,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
     for (name, line) in &parsed.libraries {
         let mtl_path = dir.join(name);
         let t = read(&mtl_path)?;
-        let mut maps = check_mtl(&mtl_path, &t)?;
+        let (mut maps, mut lines) = check_mtl(&mtl_path, &t)?;
         let (loaded, _) = tobj::load_mtl_buf(&mut t.as_bytes()).map_err(|e| {
             SceneError::line(path, *line, format!("material library `{name}` could not be read: {e}"))
         })?;
@@ -79,6 +85,9 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 ni: m.optical_density,
                 illum: m.illumination_model,
                 maps: maps.remove(&m.name).unwrap_or_default(),
+                dissolve: m.dissolve,
+                file: mtl_path.clone(),
+                lines: lines.remove(&m.name).unwrap_or_default(),
             };
             if !materials.iter().any(|(n, _)| *n == m.name) {
                 materials.push((m.name, mtl));
@@ -331,8 +340,12 @@ fn reference(r: &str, counts: [usize; 3]) -> Result<[u32; 3], String> {
 /// Texture statements are read here too: `map_Kd`, `map_Ks`, `map_Ke`, `map_d`, `map_Ns`,
 /// `map_Ka`, `bump`/`map_Bump`, `norm`, `disp`, `decal`, `refl`, each with its options, per
 /// material.
-fn check_mtl(path: &Path, text: &str) -> Result<HashMap<String, Vec<MtlMap>>, SceneError> {
+/// Also returns, per material, the line of each numeric statement.
+type StatementLines = HashMap<String, HashMap<String, usize>>;
+
+fn check_mtl(path: &Path, text: &str) -> Result<(HashMap<String, Vec<MtlMap>>, StatementLines), SceneError> {
     let mut maps: HashMap<String, Vec<MtlMap>> = HashMap::new();
+    let mut lines: StatementLines = HashMap::new();
     let mut current: Option<String> = None;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -363,9 +376,10 @@ fn check_mtl(path: &Path, text: &str) -> Result<HashMap<String, Vec<MtlMap>>, Sc
             }
             _ => continue,
         };
-        if current.is_none() {
+        let Some(name) = &current else {
             return Err(SceneError::line(path, line, format!("`{keyword}` before any newmtl")));
-        }
+        };
+        lines.entry(name.clone()).or_default().insert(keyword.to_string(), line);
         if args.len() < arity {
             return Err(SceneError::line(path, line, format!("`{keyword}` needs {arity} number(s)")));
         }
@@ -389,7 +403,7 @@ fn check_mtl(path: &Path, text: &str) -> Result<HashMap<String, Vec<MtlMap>>, Sc
             }
         }
     }
-    Ok(maps)
+    Ok((maps, lines))
 }
 
 /// Whether an MTL keyword names a texture map.
