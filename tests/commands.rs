@@ -418,3 +418,26 @@ fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
     let ks = white["parameters"]["ks"][0].as_f64().unwrap();
     assert!((kd + ks - 1.0).abs() < 1e-5 && (kd / ks - 1.6).abs() < 1e-4, "kd {kd} ks {ks}");
 }
+
+/// The shipped scenes cite the conventions file the repository holds, and no script it lacks.
+#[test]
+fn the_shipped_scenes_cite_files_the_repository_holds() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    assert!(root.join("scenes/SCENES.md").is_file());
+    for dir in std::fs::read_dir(root.join("scenes")).unwrap() {
+        let dir = dir.unwrap().path();
+        for file in std::fs::read_dir(&dir).into_iter().flatten() {
+            let file = file.unwrap().path();
+            let Ok(text) = std::fs::read_to_string(&file) else { continue };
+            for cited in ["eval/scenes.py", "scripts/make_scenes.py", "scenes/SCENES.md"] {
+                if text.lines().take(5).any(|l| l.starts_with('#') && l.contains(cited)) {
+                    assert!(
+                        root.join(cited).is_file(),
+                        "{} cites {cited}, which is not here",
+                        file.display()
+                    );
+                }
+            }
+        }
+    }
+}
