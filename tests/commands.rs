@@ -441,3 +441,81 @@ fn the_shipped_scenes_cite_files_the_repository_holds() {
         }
     }
 }
+
+/// The README's quick start renders a user's own OBJ as written.
+#[test]
+fn the_readme_quick_start_renders_an_obj() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let start = readme.find("cat > room.toml <<'TOML'\n").expect("the quick start") + 25;
+    let toml = &readme[start..start + readme[start..].find("TOML\n").unwrap()];
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("room.toml"), toml).unwrap();
+    std::fs::copy(root.join("scenes/cornell/cornell.obj"), dir.path().join("room.obj")).unwrap();
+    std::fs::copy(root.join("scenes/cornell/cornell.mtl"), dir.path().join("cornell.mtl")).unwrap();
+    let out = photonmap()
+        .current_dir(dir.path())
+        .args(["render", "room.toml", "--png", "room.png", "--quiet", "--width", "32", "--height", "24"])
+        .args(["--spp", "1", "--photons", "5000"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    assert!(dir.path().join("room.exr").is_file() && dir.path().join("room.png").is_file());
+}
+
+/// Every relative link of the README and the docs names a file that exists, and every
+/// `#anchor` a heading of its page.
+#[test]
+fn the_readme_and_docs_links_resolve() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let anchor = |h: &str| -> String {
+        let h = h.trim_start_matches('#').trim().to_lowercase();
+        h.chars()
+            .filter(|c| c.is_alphanumeric() || *c == '-' || *c == '_' || *c == ' ')
+            .collect::<String>()
+            .replace(' ', "-")
+    };
+    let headings = |page: &Path| -> Vec<String> {
+        let text = std::fs::read_to_string(page).unwrap();
+        let mut code = false;
+        let mut out = Vec::new();
+        for l in text.lines() {
+            if l.starts_with("```") {
+                code = !code;
+            } else if !code && l.starts_with('#') {
+                out.push(anchor(l));
+            }
+        }
+        out
+    };
+    let mut pages = vec![root.join("README.md")];
+    pages.extend(
+        std::fs::read_dir(root.join("docs"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "md")),
+    );
+    let mut bad = Vec::new();
+    for page in &pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        for (i, _) in text.match_indices("](") {
+            let rest = &text[i + 2..];
+            let Some(end) = rest.find(')') else { continue };
+            let link = &rest[..end];
+            if link.starts_with("http") || link.contains(' ') || link.is_empty() {
+                continue;
+            }
+            let (file, frag) = link.split_once('#').map_or((link, None), |(f, a)| (f, Some(a)));
+            let target = if file.is_empty() { page.clone() } else { page.parent().unwrap().join(file) };
+            if !target.exists() {
+                bad.push(format!("{}: {link}: no such file", page.display()));
+            } else if let Some(a) = frag {
+                if target.extension().is_some_and(|e| e == "md") && !headings(&target).iter().any(|h| h == a)
+                {
+                    bad.push(format!("{}: {link}: no such heading", page.display()));
+                }
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
