@@ -6,6 +6,9 @@
 //! from `RTC_VERSION_MAJOR/MINOR/PATCH` in `rtcore_config.h`; the script emits
 //! `cfg(embree4)` or `cfg(embree3)` and `PHOTONMAP_EMBREE_VERSION`, and links `embree4`/`embree3`.
 //!
+//! When linking, the library's version (from its file name or the version string compiled into
+//! it) must equal the headers': a mismatch is a build error naming both.
+//!
 //! `PHOTONMAP_EMBREE_CHECK_ONLY=1` generates the bindings but emits no link directives: it lets
 //! `scripts/check-embree4.sh` type-check against headers whose library is not installed.
 
@@ -127,6 +130,82 @@ mod embree {
         (field("RTC_VERSION_MAJOR"), field("RTC_VERSION_MINOR"), field("RTC_VERSION_PATCH"))
     }
 
+    /// The library `-lembree{major}` resolves to: `libembree{major}.so` in `lib_dirs`, or, for
+    /// a system install (no lib dirs), in the default library directories.
+    fn library_file(lib_dirs: &[PathBuf], major: u32) -> Option<PathBuf> {
+        let arch = env::var("CARGO_CFG_TARGET_ARCH").unwrap_or_default();
+        let os = env::var("CARGO_CFG_TARGET_OS").unwrap_or_default();
+        let abi = env::var("CARGO_CFG_TARGET_ENV").unwrap_or_default();
+        let defaults = [format!("/usr/lib/{arch}-{os}-{abi}"), "/usr/lib64".into(), "/usr/lib".into()]
+            .map(PathBuf::from);
+        let dirs = if lib_dirs.is_empty() { &defaults[..] } else { lib_dirs };
+        dirs.iter().map(|d| d.join(format!("libembree{major}.so"))).find(|f| f.exists())
+    }
+
+    /// The Embree version of the shared library `file` (a symlink is followed): from the real
+    /// file's name (`libembree4.so.4.3.3`, as Debian and Intel's releases name it), else from
+    /// the `RTC_VERSION_STRING` literal (`"4.3.3"`, NUL-terminated) compiled into it, which is
+    /// also there when the file was renamed (as Python wheels do: `libembree4-92ec4c98.so.4`).
+    fn library_version(file: &Path, major: u32) -> Result<String, String> {
+        let real = std::fs::canonicalize(file).map_err(|e| format!("{}: {e}", file.display()))?;
+        let is_version = |s: &str| {
+            let parts: Vec<&str> = s.split('.').collect();
+            parts.len() == 3
+                && parts[0] == major.to_string()
+                && parts.iter().all(|p| !p.is_empty() && p.bytes().all(|b| b.is_ascii_digit()))
+        };
+        let name = real.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if let Some(v) = name.strip_prefix(&format!("libembree{major}.so.")).filter(|v| is_version(v)) {
+            return Ok(v.to_string());
+        }
+        let bytes = std::fs::read(&real).map_err(|e| format!("{}: {e}", real.display()))?;
+        let mut found: Vec<&str> = bytes
+            .split(|&b| b == 0)
+            .filter(|s| s.len() <= 16)
+            .filter_map(|s| std::str::from_utf8(s).ok())
+            .filter(|s| is_version(s))
+            .collect();
+        found.sort_unstable();
+        found.dedup();
+        match found[..] {
+            [v] => Ok(v.to_string()),
+            [] => Err(format!("{}: no {major}.x.y version string in the library", real.display())),
+            _ => Err(format!(
+                "{}: several version strings in the library: {}",
+                real.display(),
+                found.join(", ")
+            )),
+        }
+    }
+
+    /// Fails the build when the library that will be linked is another Embree version than
+    /// the headers the bindings come from: the structs passed to Embree (rays, hits, query
+    /// arguments) differ between 4.x releases, and a mismatch overruns them at run time.
+    fn check_library_version(install: &Install, headers: &str) {
+        let major = install.major;
+        let Some(file) = library_file(&install.lib_dirs, major) else {
+            println!(
+                "cargo:warning=Embree {headers}: libembree{major}.so not found, its version is not checked"
+            );
+            return;
+        };
+        println!("cargo:rerun-if-changed={}", file.display());
+        match library_version(&file, major) {
+            Ok(v) if v == headers => {}
+            Ok(v) => panic!(
+                "Embree version mismatch ({}): the headers are {headers} but the library {} is {v}; \
+                 use the headers of the library's release",
+                install.found_by,
+                file.display()
+            ),
+            Err(e) if env::var_os("EMBREE_DIR").is_some_and(|d| !d.is_empty()) => panic!(
+                "{}: cannot tell the version of the Embree library (headers: {headers}): {e}",
+                install.found_by
+            ),
+            Err(e) => println!("cargo:warning=Embree {headers}: library version not checked: {e}"),
+        }
+    }
+
     pub fn generate() {
         let install = match env::var_os("EMBREE_DIR").filter(|d| !d.is_empty()) {
             Some(dir) => from_embree_dir(Path::new(&dir)),
@@ -160,6 +239,7 @@ mod embree {
                 }
             }
             println!("cargo:rustc-link-lib=dylib=embree{major}");
+            check_library_version(&install, &format!("{maj}.{min}.{patch}"));
         }
 
         let bindings = bindgen::Builder::default()

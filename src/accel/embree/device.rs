@@ -74,6 +74,22 @@ impl Device {
         unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(record_error), user) };
         let device = Device { raw, log };
         device.check("rtcSetDeviceErrorFunction")?;
+        // The library loaded at run time (LD_LIBRARY_PATH can swap it) must be the release whose
+        // headers the bindings come from: the structs we pass differ between releases.
+        // SAFETY: `raw` is a live device and RTC_DEVICE_PROPERTY_VERSION a valid property.
+        let linked = unsafe { sys::rtcGetDeviceProperty(raw, sys::RTC_DEVICE_PROPERTY_VERSION) };
+        device.check("rtcGetDeviceProperty(RTC_DEVICE_PROPERTY_VERSION)")?;
+        let linked = i64::try_from(linked).unwrap_or(-1);
+        if linked != i64::from(sys::RTC_VERSION) {
+            return Err(AccelError::Embree(format!(
+                "the Embree library loaded is version {}.{}.{}, but photonmap was built against \
+                 the headers of Embree {}: rebuild it against the library's headers",
+                linked / 10000,
+                linked / 100 % 100,
+                linked % 100,
+                super::version()
+            )));
+        }
         Ok(device)
     }
 
