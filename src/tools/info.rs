@@ -2,7 +2,7 @@
 //! triangles using each), lights with their power, portals. One [`SceneInfo`] is printed either
 //! as aligned tables (its `Display`) or as JSON (`Serialize`), so the two never disagree.
 
-use crate::light::{area_lights, Light, LightDesc};
+use crate::light::{build_lights, EmissionTextures, Light, LightDesc};
 use crate::material::Material;
 use crate::scene::{Scene, TextureRef};
 use glam::Vec3;
@@ -145,16 +145,36 @@ impl SceneInfo {
                 MaterialInfo { name: name.clone(), kind, triangles, parameters, textures }
             })
             .collect();
-        let mut lights: Vec<LightInfo> = scene.lights.iter().map(|l| light_info(l, scene)).collect();
-        let area = area_lights(&scene.mesh, &scene.tri_material, &scene.materials);
-        if !area.is_empty() {
-            lights.push(LightInfo {
-                kind: "area",
-                power: area.power().to_array(),
-                parameters: vec![("triangles", vec![area.len() as f32])],
-                map: None,
-            });
-        }
+        // The lights as the renderer builds them (textured emitters included), for their power.
+        let maps = scene.emission_maps();
+        let emission = maps.as_deref().map(|maps| EmissionTextures {
+            uvs: &scene.attributes.uvs,
+            textures: &scene.textures,
+            maps,
+        });
+        let built = build_lights(
+            &scene.lights,
+            &scene.mesh,
+            &scene.tri_material,
+            &scene.materials,
+            &scene.portals,
+            emission,
+        );
+        let lights = built
+            .iter()
+            .enumerate()
+            .filter_map(|(i, l)| match (scene.lights.get(i), l) {
+                (Some(desc), _) => Some(light_info(desc, l.power())),
+                (None, Light::Area(area)) => Some(LightInfo {
+                    kind: "area",
+                    power: area.power().to_array(),
+                    parameters: vec![("triangles", vec![area.len() as f32])],
+                    map: None,
+                }),
+                // build_lights adds nothing after the descriptions but the area lights.
+                (None, _) => None,
+            })
+            .collect();
         let portals = scene
             .portals
             .iter()
@@ -192,11 +212,9 @@ fn material_parameters(m: &Material) -> (&'static str, Vec<(&'static str, Vec<f3
     }
 }
 
-fn light_info(l: &LightDesc, scene: &Scene) -> LightInfo {
+fn light_info(l: &LightDesc, power: Vec3) -> LightInfo {
     let v = |x: Vec3| x.to_array().to_vec();
-    let mut built = Light::from_desc(l);
-    built.preprocess(scene.mesh.bounds(), &scene.portals);
-    let power = built.power().to_array();
+    let power = power.to_array();
     let (kind, parameters, map) = match l {
         LightDesc::Point { position, intensity } => {
             ("point", vec![("position", v(*position)), ("intensity", v(*intensity))], None)
