@@ -102,6 +102,9 @@ pub enum Command {
     /// of photons, gather queries and rays per second against the raw ray rate of the same
     /// accelerator measured in the same run.
     Bench(Box<BenchArgs>),
+    /// Add up partial films (`render --pass-range`) into the image one process rendering
+    /// every pass would have made, bit for bit, and report its estimated error.
+    Merge(MergeArgs),
     /// Print what a scene holds: geometry, bounds, cameras, textures, materials (with the
     /// triangles using each), lights with their power, portals.
     Info {
@@ -173,8 +176,50 @@ pub struct RenderArgs {
     /// Write the image so far (EXR, and PNG if asked) every this many passes.
     #[arg(long, value_name = "K")]
     pub checkpoint_every: Option<u32>,
+    /// Render only passes A to B-1 of the --passes N render and write them as a partial film
+    /// (.exr: the exact sums of the passes) for `photonmap merge`; any split of 0..N merges
+    /// into the image of one process (pppm, photon and path; not sppm)
+    #[arg(long, value_name = "A..B")]
+    pub pass_range: Option<String>,
+    /// Add the estimated error of each pixel to the EXR as a channel `error` (its RMSE over
+    /// the three channels, estimated from the spread of the passes: 2 passes at least)
+    #[arg(long)]
+    pub error_layer: bool,
     #[command(flatten)]
     pub settings: SettingsArgs,
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Partial films written by `photonmap render --pass-range`, in any order.
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+    /// The image (.exr), with the record `render` writes (so `--resume` knows it).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write an 8-bit sRGB PNG preview here.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Exposure of the PNG in stops.
+    #[arg(long, value_name = "EV", default_value_t = 0.0, value_parser = exposure)]
+    pub exposure: f32,
+    /// Tone curve of the PNG: clamp, filmic or aces.
+    #[arg(long, value_name = "CURVE", default_value = "clamp", value_parser = choice::<ToneCurve>())]
+    pub tonemap: ToneCurve,
+    /// Write a JSON report (the parts, the passes, the estimated error) here.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
+    /// Merge what is there when passes are missing (the image of the passes present, marked
+    /// partial in its header) instead of refusing.
+    #[arg(long)]
+    pub partial: bool,
+    /// Add the per-pixel estimated error as a channel `error`.
+    #[arg(long)]
+    pub error_layer: bool,
+    /// Exit with status 3 (after writing) unless the estimated relative RMSE is at most this:
+    /// a loop that renders more parts until the image is good enough stops on status 0.
+    #[arg(long, value_name = "E")]
+    pub target_error: Option<f64>,
 }
 
 /// Settings that may also be given in the scene's `[render]` table; flags win. One flag per

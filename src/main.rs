@@ -27,7 +27,12 @@ fn main() -> ExitCode {
         Command::Render(args) => match render(*args) {
             // Stopped by Ctrl-C after writing the image so far: the shell's code for SIGINT.
             Ok(Finished::Interrupted) => return ExitCode::from(130),
-            Ok(Finished::Done) => Ok(()),
+            Ok(Finished::Done | Finished::TargetMissed) => Ok(()),
+            Err(e) => Err(e),
+        },
+        Command::Merge(args) => match merge(args) {
+            Ok(Finished::TargetMissed) => return ExitCode::from(3),
+            Ok(_) => Ok(()),
             Err(e) => Err(e),
         },
         Command::Agree(args) => agree(args),
@@ -81,6 +86,8 @@ enum Finished {
     Done,
     /// Ctrl-C stopped a progressive render; the passes done were written.
     Interrupted,
+    /// `merge --target-error`: written, but the estimated error is above the target.
+    TargetMissed,
 }
 
 /// Set by the first Ctrl-C of a progressive render.
@@ -153,6 +160,10 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
             settings.resolve(w, h).map_err(|e| setting_error(e, &flags, size_flags, &args.scene))
         })
         .collect::<Result<Vec<_>>>()?;
+    let pass_range = match &args.pass_range {
+        Some(text) => Some(check_pass_range(text, &args, &jobs, &cfgs)?),
+        None => None,
+    };
     let outputs = jobs.iter().flat_map(|j| std::iter::once(&j.output).chain(&j.png));
     if let Some(stats) = &args.stats {
         if let Some(o) = outputs.clone().find(|o| same_file(o, stats)) {
@@ -175,6 +186,8 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         checkpoint_every: args.checkpoint_every,
         started: wall,
         preview: photonmap::film::Tonemap { exposure: args.exposure, curve: args.tonemap },
+        pass_range,
+        error_layer: args.error_layer,
     };
     let load = stats.stages.clone();
     let (mut done, raw) = pool.install(|| -> Result<_> {
@@ -231,7 +244,13 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
         let what = match &done[..] {
             [only] => {
                 let passes = first.map_or(0, |s| s.passes);
-                let passes = if passes > 1 { format!(" a pass, {passes} passes") } else { String::new() };
+                let passes = match pass_range {
+                    Some((a, _)) => {
+                        format!(" a pass, passes {a}..{} of {}", a + passes, cfg.passes.unwrap_or(0))
+                    }
+                    None if passes > 1 => format!(" a pass, {passes} passes"),
+                    None => String::new(),
+                };
                 let skipped = if only.stats.is_none() { " already finished (--resume)" } else { "" };
                 format!(
                     "{}{skipped} ({}x{}, {} spp{passes})",
@@ -257,8 +276,133 @@ fn render(args: cli::RenderArgs) -> Result<Finished> {
             if threads == 1 { "" } else { "s" },
             if cancelled { " (interrupted)" } else { "" }
         );
+        if let (Some(e), 1) = (first.and_then(|s| s.error_estimate), done.len()) {
+            eprintln!("photonmap: {}", e.describe());
+        }
     }
     Ok(if cancelled { Finished::Interrupted } else { Finished::Done })
+}
+
+/// The passes `--pass-range A..B` asks for, refused unless they can be rendered apart: one
+/// image, an integrator whose passes are independent, a pass count to be a part of, no time
+/// budget or target error (a part is a fixed set of passes), an EXR output.
+fn check_pass_range(
+    text: &str,
+    args: &cli::RenderArgs,
+    jobs: &[batch::plan::Job],
+    cfgs: &[photonmap::config::RenderConfig],
+) -> Result<(u32, u32)> {
+    use photonmap::config::Integrator;
+    let range = photonmap::film::partial::parse_range(text)
+        .ok_or_else(|| anyhow!("--pass-range {text}: not A..B with A < B (passes A to B-1, from 0)"))?;
+    let (cfg, job) = match (cfgs, jobs) {
+        ([cfg], [job]) => (cfg, job),
+        _ => bail!(
+            "--pass-range renders one image, not {}: choose one camera (--cameras) and frame (--frames)",
+            jobs.len()
+        ),
+    };
+    if matches!(cfg.integrator, Integrator::Progressive(_)) {
+        bail!("--pass-range: sppm carries each pixel's statistics from pass to pass, so its passes cannot be rendered apart; use --integrator pppm");
+    }
+    let Some(total) = cfg.passes else {
+        bail!("--pass-range {text} needs --passes N, the passes of the whole render it is a part of");
+    };
+    if range.end > total {
+        bail!("--pass-range {text}: beyond the render's {total} passes (--passes)");
+    }
+    for (given, flag) in [
+        (cfg.time.is_some(), "--time"),
+        (cfg.target_error.is_some(), "--target-error"),
+        (args.checkpoint_every.is_some(), "--checkpoint-every"),
+        (args.png.is_some(), "--png"),
+        (args.error_layer, "--error-layer"),
+        (args.resume, "--resume"),
+    ] {
+        if given {
+            bail!("--pass-range with {flag}: a part is a fixed set of passes for `photonmap merge`, which writes the image");
+        }
+    }
+    if batch::plan::Format::of(&job.output) != Ok(batch::plan::Format::Exr) {
+        bail!("{}: a partial film is an OpenEXR file (.exr)", job.output.display());
+    }
+    Ok((range.start, range.end))
+}
+
+/// `photonmap merge`: the parts added up, the image written with the parts' record, the
+/// estimated error said (and written with `--stats`).
+fn merge(args: cli::MergeArgs) -> Result<Finished> {
+    let wall = Instant::now();
+    if batch::plan::Format::of(&args.output) != Ok(batch::plan::Format::Exr) {
+        bail!("{}: the merged image is an OpenEXR file (.exr); --png adds a preview", args.output.display());
+    }
+    if let Some(e) = args.target_error {
+        if !(e.is_finite() && e > 0.0) {
+            bail!("--target-error: {e} must be a finite relative error above 0 (0.01: 1 %)");
+        }
+    }
+    check_outputs(std::iter::once(&args.output).chain(&args.png).chain(&args.stats))?;
+    for part in &args.parts {
+        if [Some(&args.output), args.png.as_ref(), args.stats.as_ref()]
+            .into_iter()
+            .flatten()
+            .any(|o| same_file(o, part))
+        {
+            bail!("{}: a part is also an output of the merge", part.display());
+        }
+    }
+    let merged = batch::merge::merge(&args.parts, args.partial).map_err(anyhow::Error::msg)?;
+    let film = merged.sums.mean();
+    let error = if args.error_layer { merged.sums.error_film() } else { None };
+    film.write_exr_with_error(&args.output, &merged.record, error.as_ref())?;
+    if let Some(png) = &args.png {
+        film.write_png_with(png, photonmap::film::Tonemap { exposure: args.exposure, curve: args.tonemap })?;
+    }
+    let estimate = merged.sums.estimate();
+    if let Some(path) = &args.stats {
+        #[derive(serde::Serialize)]
+        struct Report<'a> {
+            output: String,
+            width: usize,
+            height: usize,
+            passes: u32,
+            total_passes: u32,
+            missing: Vec<String>,
+            parts: &'a [batch::merge::PartReport],
+            error_estimate: Option<photonmap::film::sums::ErrorEstimate>,
+            seconds: f64,
+        }
+        let report = Report {
+            output: args.output.display().to_string(),
+            width: merged.sums.width,
+            height: merged.sums.height,
+            passes: merged.sums.passes,
+            total_passes: merged.total,
+            missing: merged.missing.iter().map(|r| format!("{}..{}", r.start, r.end)).collect(),
+            parts: &merged.parts,
+            error_estimate: estimate,
+            seconds: wall.elapsed().as_secs_f64(),
+        };
+        std::fs::write(path, serde_json::to_string_pretty(&report)?)
+            .with_context(|| format!("{}: could not write the stats", path.display()))?;
+    }
+    let described = estimate.map_or("no error estimate from one pass".to_string(), |e| e.describe());
+    eprintln!(
+        "photonmap: {} from {} parts ({} of {} passes) in {:.2} s; {described}",
+        args.output.display(),
+        args.parts.len(),
+        merged.sums.passes,
+        merged.total,
+        wall.elapsed().as_secs_f64()
+    );
+    if let Some(target) = args.target_error {
+        let reached = estimate.is_some_and(|e| e.relative_rmse <= target);
+        if !reached {
+            eprintln!("photonmap: estimated relative RMSE above the target {target}: render more passes");
+            return Ok(Finished::TargetMissed);
+        }
+    }
+    Ok(Finished::Done)
 }
 
 /// A setting that cannot be honoured, named where it was given: the flag when the command line

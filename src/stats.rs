@@ -67,6 +67,9 @@ pub struct Stats {
     pub passes: u32,
     /// Whether a stop request (Ctrl-C) ended the render early.
     pub cancelled: bool,
+    /// The image's error estimated from the spread of its passes (and the probed bias of the
+    /// photon estimate): `None` with one pass, or with sppm, whose passes are not independent.
+    pub error_estimate: Option<crate::film::sums::ErrorEstimate>,
     pub stages: Vec<Stage>,
     pub photons: BTreeMap<String, MapStats>,
     pub rays: RayCounts,

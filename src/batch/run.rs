@@ -6,6 +6,7 @@
 use super::meta::{ImageMeta, FINISHED};
 use super::plan::{Format, Job};
 use crate::config::RenderConfig;
+use crate::film::partial::PartialFilm;
 use crate::film::{Film, ImageError, Tonemap};
 use crate::frame::Progress;
 use crate::integrator::{Checkpoint, Control, Prepared};
@@ -30,7 +31,15 @@ pub struct Options<'a> {
     pub started: Instant,
     /// How PNG outputs and previews show the radiance (the EXRs hold it linear).
     pub preview: Tonemap,
+    /// `(a, b)`: render passes `a..b` of the `--passes` render only, and write each output as
+    /// a partial film ([`PartialFilm`]) instead of an image.
+    pub pass_range: Option<(u32, u32)>,
+    /// Add the per-pixel estimated error to each EXR (channel `error`).
+    pub error_layer: bool,
 }
+
+/// The state a partial film's record says.
+pub const PARTIAL_STATE: &str = "partial film";
 
 /// What became of one image of the batch.
 #[derive(Debug)]
@@ -67,7 +76,7 @@ pub fn run(
         }
         let checkpoint = |passes: u32, film: &Film| {
             let state = format!("checkpoint after {passes} passes");
-            if let Err(e) = write(job, film, &meta, &state, options.preview) {
+            if let Err(e) = write(job, film, None, &meta, &state, options.preview) {
                 eprintln!("photonmap: warning: checkpoint after {passes} passes not written: {e}");
             }
         };
@@ -75,14 +84,23 @@ pub fn run(
             cancel: options.cancel,
             checkpoint: options.checkpoint_every.map(|k| (k, &checkpoint as Checkpoint)),
             started: if i == 0 { options.started } else { Instant::now() },
+            range: options.pass_range,
         };
         let output = prepared.render_view(&shared, views, view, cfg, inner, control);
-        let state = if output.stats.cancelled {
-            format!("interrupted after {} passes", output.stats.passes)
+        if let Some((a, _)) = options.pass_range {
+            // Interrupted, the part holds the passes it finished, and says so.
+            let range = a..a + output.stats.passes;
+            let total = cfg.passes.unwrap_or(range.end);
+            PartialFilm::write(&job.output, &output.sums, range, total, &meta.attributes(PARTIAL_STATE))?;
         } else {
-            FINISHED.to_string()
-        };
-        write(job, &output.film, &meta, &state, options.preview)?;
+            let state = if output.stats.cancelled {
+                format!("interrupted after {} passes", output.stats.passes)
+            } else {
+                FINISHED.to_string()
+            };
+            let error = if options.error_layer { output.sums.error_film() } else { None };
+            write(job, &output.film, error.as_ref(), &meta, &state, options.preview)?;
+        }
         let cancelled = output.stats.cancelled;
         done.push(Done { job: job.clone(), stats: Some(output.stats) });
         outer.advance(1);
@@ -94,11 +112,19 @@ pub fn run(
     Ok(done)
 }
 
-/// Writes `job`'s image (and its PNG, mapped by `preview`) with `meta` in the state `state`.
-fn write(job: &Job, film: &Film, meta: &ImageMeta, state: &str, preview: Tonemap) -> Result<(), ImageError> {
+/// Writes `job`'s image (with the per-pixel `error` layer if given, and its PNG, mapped by
+/// `preview`) with `meta` in the state `state`.
+fn write(
+    job: &Job,
+    film: &Film,
+    error: Option<&Film>,
+    meta: &ImageMeta,
+    state: &str,
+    preview: Tonemap,
+) -> Result<(), ImageError> {
     match Format::of(&job.output) {
         Ok(Format::Png) => film.write_png_with(&job.output, preview)?,
-        _ => film.write_exr_with(&job.output, &meta.attributes(state))?,
+        _ => film.write_exr_with_error(&job.output, &meta.attributes(state), error)?,
     }
     if let Some(png) = &job.png {
         film.write_png_with(png, preview)?;

@@ -222,13 +222,16 @@ pub struct RenderConfig {
     pub passes: Option<u32>,
     /// Time budget in seconds: no pass starts that would end after it (the first always runs).
     pub time: Option<f64>,
+    /// Stop once the estimated relative RMSE of the image is below this (after at least
+    /// [`TARGET_ERROR_MIN_PASSES`](crate::integrator::passes::TARGET_ERROR_MIN_PASSES) passes).
+    pub target_error: Option<f64>,
     pub integrator: Integrator,
 }
 
 impl RenderConfig {
     /// Whether more than one pass may run.
     pub fn is_progressive(&self) -> bool {
-        self.time.is_some() || self.passes.is_some_and(|p| p > 1)
+        self.time.is_some() || self.target_error.is_some() || self.passes.is_some_and(|p| p > 1)
     }
 }
 

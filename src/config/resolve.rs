@@ -82,8 +82,13 @@ impl RenderSettings {
             height,
             spp: self.spp.unwrap_or(if sppm { SPPM_SPP } else { 64 }),
             seed: self.seed.unwrap_or(1),
-            passes: self.passes.or(if sppm && self.time.is_none() { Some(SPPM_PASSES) } else { None }),
+            passes: self.passes.or(if sppm && self.time.is_none() && self.target_error.is_none() {
+                Some(SPPM_PASSES)
+            } else {
+                None
+            }),
             time: self.time,
+            target_error: self.target_error,
             integrator,
         };
         c.validate()?;
@@ -135,6 +140,14 @@ impl RenderConfig {
         if let Some(t) = self.time {
             if !(t.is_finite() && t > 0.0) {
                 return Err(bad("time", format!("{t} must be a finite number of seconds above 0")));
+            }
+        }
+        if let Some(e) = self.target_error {
+            if !(e.is_finite() && e > 0.0) {
+                return Err(bad(
+                    "target_error",
+                    format!("{e} must be a finite relative error above 0 (0.01: 1 %)"),
+                ));
             }
         }
         Ok(())

@@ -149,6 +149,10 @@ settings! {
     /// Time budget in seconds from the start of the command: no pass starts that would end
     /// after it, and the image so far is written.
     time: f64,
+    /// Stop once the image's estimated relative RMSE (from the spread of its passes, and the
+    /// probed bias of pppm's photon estimate) is below this, e.g. 0.01 for 1 %; with --passes
+    /// or --time, whichever comes first. Not with sppm, whose passes are not independent.
+    target_error: f64,
     /// Progressive photon mapping's alpha, the fraction of new photons kept when the radius
     /// shrinks, in (0, 1) [default: 0.7].
     alpha: f32,

@@ -3,6 +3,7 @@
 //! balancing of the maps (each stage recorded in the stats with why it ran or why not), and the
 //! gather parameters both read the maps with.
 
+use super::passes;
 use crate::accel::Accel;
 use crate::config::{CausticPass, ColorMode, Gathers, PhotonPasses};
 use crate::frame::{Frame, Progress};
@@ -105,18 +106,21 @@ pub struct MapStages<'a> {
 }
 
 impl MapStages<'_> {
-    /// Traces and balances the maps of the pass seeded `seed` (empty maps dropped), and picks
-    /// the photon positions for precomputed irradiance.
+    /// Traces and balances the maps of `pass` (empty maps dropped), and picks the photon
+    /// positions for precomputed irradiance. What the analysis works out once (the aim, the
+    /// guide, the portals) it works out from the render's seed, whichever pass comes first,
+    /// so that a pass's maps depend on the seed and the pass index only (`--pass-range`).
     pub fn trace<A: Accel>(
         &self,
         frame: &Frame<'_, A>,
         analysis: &Analysis,
-        seed: u64,
+        pass: &passes::Pass,
         stats: &mut Stats,
         progress: &dyn Progress,
     ) -> (PhotonMaps, Vec<SitePoint>) {
-        let (indirect, sites) = self.indirect(frame, analysis, seed, stats, progress);
-        let caustic = self.caustic(frame, analysis, seed, stats, progress);
+        let seeds = Seeds { pass: pass.seed, render: pass.samples.seed };
+        let (indirect, sites) = self.indirect(frame, analysis, seeds, stats, progress);
+        let caustic = self.caustic(frame, analysis, seeds, stats, progress);
         (PhotonMaps { indirect, caustic }, sites)
     }
 
@@ -124,10 +128,11 @@ impl MapStages<'_> {
         &self,
         frame: &Frame<'_, A>,
         analysis: &Analysis,
-        seed: u64,
+        seeds: Seeds,
         stats: &mut Stats,
         progress: &dyn Progress,
     ) -> (Vec<PhotonMap>, Vec<SitePoint>) {
+        let seed = seeds.pass;
         let p = self.passes;
         let why_not = if !analysis.has_light() {
             Some("no light has power")
@@ -143,9 +148,9 @@ impl MapStages<'_> {
             return (Vec::new(), Vec::new());
         }
         let outside = crate::integrator::path::Outside { frame, max_depth: p.max_bounces };
-        let set = analysis.portals.get_or_init(|| self.portal_set(frame, &outside, seed, stats));
+        let set = analysis.portals.get_or_init(|| self.portal_set(frame, &outside, seeds.render, stats));
         let portals = (!set.is_empty()).then_some(Portals { set, outside: &outside });
-        let guide = analysis.guide.get_or_init(|| self.guide(frame, portals, seed, stats));
+        let guide = analysis.guide.get_or_init(|| self.guide(frame, portals, seeds.render, stats));
         progress.start("indirect photons", p.photons);
         let why = if guide.emission.is_some() {
             "diffuse surfaces and lit scene; emission guided toward what the camera sees"
@@ -323,10 +328,11 @@ impl MapStages<'_> {
         &self,
         frame: &Frame<'_, A>,
         analysis: &Analysis,
-        seed: u64,
+        seeds: Seeds,
         stats: &mut Stats,
         progress: &dyn Progress,
     ) -> Vec<PhotonMap> {
+        let seed = seeds.pass;
         let p = self.passes;
         if let Some(why) = self.caustic_skip_reason(analysis) {
             stats.skip("photons.caustic", why);
@@ -344,7 +350,7 @@ impl MapStages<'_> {
                 } else {
                     ACCEPTANCE_TRIES
                         .iter()
-                        .map(|&n| trace::target_acceptance(frame.lights, &targets, n, seed))
+                        .map(|&n| trace::target_acceptance(frame.lights, &targets, n, seeds.render))
                         .find(|&a| a > 0.0)
                         .unwrap_or(0.0)
                 };
@@ -396,12 +402,20 @@ impl MapStages<'_> {
         progress.finish();
         stats.rays.photon += out.rays;
         // (Learnt here only when no indirect pass runs: the region alone is read.)
-        let region = &analysis.guide.get_or_init(|| self.guide(frame, None, seed, stats)).region;
+        let region = &analysis.guide.get_or_init(|| self.guide(frame, None, seeds.render, stats)).region;
         let seen = count_seen(&out, region);
         let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
         record_maps(stats, "caustic", &maps, &seen);
         drop_empty(stats, "caustic", maps)
     }
+}
+
+/// The seeds of a pass's photon stages: the pass's own, and the render's, from which what is
+/// worked out once for every pass is worked out.
+#[derive(Clone, Copy, Debug)]
+struct Seeds {
+    pass: u64,
+    render: u64,
 }
 
 /// The gathers of a photon-mapping render, with radii resolved for the scene.

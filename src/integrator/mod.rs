@@ -17,6 +17,7 @@ pub use passes::{Checkpoint, Control};
 
 use crate::accel::{Accel, AccelError, AccelOptions, AnyAccel};
 use crate::config::{Integrator, RenderConfig};
+use crate::film::sums::PassSums;
 use crate::film::Film;
 use crate::frame::{Counters, Frame, Progress};
 use crate::light::{EmissionTextures, LightSet};
@@ -24,9 +25,11 @@ use crate::scene::{Camera, Scene};
 use crate::stats::Stats;
 use std::borrow::Cow;
 
-/// The image and the report of a render.
+/// The image and the report of a render, and the exact sums of its passes (what a
+/// `--pass-range` part holds).
 pub struct RenderOutput {
     pub film: Film,
+    pub sums: PassSums,
     pub stats: Stats,
 }
 
@@ -53,7 +56,7 @@ pub fn render<A: Accel>(
 ) -> RenderOutput {
     let start = std::time::Instant::now();
     let analysis = &shared.analysis;
-    let (film, counters) = match &cfg.integrator {
+    let rendered = match &cfg.integrator {
         Integrator::Photon(c) => {
             let mut mapper = photon::PhotonMapper::new(frame, c, analysis, &shared.maps);
             passes::run(cfg, control, progress, &mut stats, &mut mapper)
@@ -70,9 +73,10 @@ pub fn render<A: Accel>(
             passes::run(cfg, control, progress, &mut stats, &mut path::PathTracer::new(frame, c))
         }
     };
+    let passes::Rendered { film, sums, counters } = rendered;
     finish_stats(&mut stats, &counters, cfg);
     stats.wall_seconds += start.elapsed().as_secs_f64();
-    RenderOutput { film, stats }
+    RenderOutput { film, sums, stats }
 }
 
 /// Totals and rates of a finished render.

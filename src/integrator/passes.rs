@@ -4,6 +4,7 @@
 //! passes. [`run`] is the loop; an integrator only says what one pass does ([`PassRenderer`]).
 
 use crate::config::RenderConfig;
+use crate::film::sums::{Bias, PassSums};
 use crate::film::Film;
 use crate::frame::camera::PixelSamples;
 use crate::frame::{Counters, Progress, Quiet};
@@ -11,6 +12,19 @@ use crate::sampling::derive_seed;
 use crate::stats::Stats;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
+
+/// What one pass gives: its image and, where the integrator probes the bias of its photon
+/// estimate ([`Bias::Probed`]), the probe per pixel.
+pub struct PassImage {
+    pub film: Film,
+    pub bias_probe: Option<Film>,
+}
+
+impl From<Film> for PassImage {
+    fn from(film: Film) -> Self {
+        PassImage { film, bias_probe: None }
+    }
+}
 
 /// One pass of a render, as an integrator sees it.
 #[derive(Clone, Copy, Debug)]
@@ -28,7 +42,25 @@ pub struct Pass {
 pub trait PassRenderer {
     /// Renders `pass` (its photon stages, if any, then its camera stage, each recorded in
     /// `stats`): the pass's image, which [`run`] averages over passes, and its counters.
-    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters);
+    fn render_pass(
+        &mut self,
+        pass: &Pass,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PassImage, Counters);
+
+    /// What the passes say of their bias (for the error estimate): unknown unless the
+    /// integrator says otherwise.
+    fn bias(&self) -> Bias {
+        Bias::Unknown
+    }
+
+    /// Whether each pass's image depends only on the seed and the pass index, so that passes
+    /// rendered apart and summed give the render's image (all but stochastic progressive
+    /// photon mapping, whose passes carry per-pixel statistics).
+    fn independent_passes(&self) -> bool {
+        true
+    }
 
     /// The image after `passes` passes, given the mean of their images (progressive photon
     /// mapping adds its photon term here).
@@ -37,31 +69,48 @@ pub trait PassRenderer {
     }
 }
 
-/// Renders passes with `integrator` until `cfg` and `control` say to stop; returns the image
-/// and the counters of every pass. Records the passes done and whether a stop request ended
-/// the render in `stats`.
+/// What a run of passes gives: the image, the exact sums of its passes (which
+/// `--pass-range` writes and `photonmap merge` adds up) and the counters of every pass.
+pub struct Rendered {
+    pub film: Film,
+    pub sums: PassSums,
+    pub counters: Counters,
+}
+
+/// Passes before the estimated error may stop a render (`--target-error`): fewer say too
+/// little of their own spread.
+pub const TARGET_ERROR_MIN_PASSES: u32 = 4;
+
+/// Renders passes with `integrator` until `cfg` and `control` say to stop (only the passes of
+/// `control.range`, if it gives one); returns the image, the sums of the passes and the
+/// counters of every pass. Records the passes done, whether a stop request ended the render
+/// and the estimated error (when the passes are independent) in `stats`.
 pub fn run(
     cfg: &RenderConfig,
     control: Control<'_>,
     progress: &dyn Progress,
     stats: &mut Stats,
     integrator: &mut impl PassRenderer,
-) -> (Film, Counters) {
+) -> Rendered {
     let mut schedule = Schedule::new(cfg, control);
     let progressive = schedule.is_progressive();
+    let first = control.range.map_or(0, |r| r.0);
     // In a progressive render one bar counts the passes; the stages of each pass stay quiet.
     let inner: &dyn Progress = if progressive { &Quiet } else { progress };
-    let mut sum = FilmSum::new(cfg.width as usize, cfg.height as usize);
+    let independent = integrator.independent_passes();
+    let mut sums = PassSums::new(cfg.width as usize, cfg.height as usize, integrator.bias());
     let mut counters = Counters::default();
     if progressive {
         progress.start("passes", schedule.progress_total());
     }
+    let mut batches = Batches::new(cfg, control);
     while schedule.start_pass() {
-        let index = schedule.done();
+        let index = first + schedule.done();
         let samples = PixelSamples { spp: cfg.spp, first: index as u64 * cfg.spp as u64, seed: cfg.seed };
         let pass = Pass { index, seed: pass_seed(cfg.seed, index), samples };
-        let (film, c) = integrator.render_pass(&pass, stats, inner);
-        sum.add(&film);
+        let (image, c) = integrator.render_pass(&pass, stats, inner);
+        sums.add_pass(&image.film, image.bias_probe.as_ref(), batches.is_first(index));
+        batches.after_pass(&sums);
         counters += c;
         let (units, due) = schedule.finish_pass();
         if progressive {
@@ -69,15 +118,79 @@ pub fn run(
         }
         progress.advance(if progressive { units } else { 0 });
         if due {
-            schedule.checkpoint(&integrator.finish(sum.mean(schedule.done()), schedule.done()));
+            schedule.checkpoint(&integrator.finish(sums.mean(), schedule.done()));
+        }
+        if let (Some(target), true) = (cfg.target_error, independent) {
+            // Checked after 4, 8, 16, … passes: then the first half is a batch of its own.
+            let n = schedule.done();
+            if n >= TARGET_ERROR_MIN_PASSES && n.is_power_of_two() {
+                let mut halves = sums.clone();
+                batches.name_first(&mut halves);
+                if halves.estimate().is_some_and(|e| e.relative_rmse <= target) {
+                    schedule.reached_target();
+                }
+            }
         }
     }
     if progressive {
         progress.finish();
     }
+    batches.name_first(&mut sums);
     stats.passes = schedule.done();
     stats.cancelled = schedule.cancelled();
-    (integrator.finish(sum.mean(schedule.done()), schedule.done()), counters)
+    stats.error_estimate = if independent { sums.estimate() } else { None };
+    Rendered { film: integrator.finish(sums.mean(), schedule.done()), sums, counters }
+}
+
+/// Which passes make the first of the two batches the error estimate compares
+/// ([`PassSums::estimate`]): with a pass count known in advance (and always for a
+/// `--pass-range` part, so that parts rendered apart agree), those before its half way;
+/// otherwise (a time budget, a target error) the passes up to a power of two, the one of the
+/// last two powers that splits the passes done most evenly, kept as a snapshot of the sums.
+enum Batches {
+    /// The first batch: passes before this index.
+    Fixed(u32),
+    /// Snapshots at the last two powers of two: (passes, sums).
+    Open(Vec<(u32, Vec<[i128; 3]>)>),
+}
+
+impl Batches {
+    fn new(cfg: &RenderConfig, control: Control<'_>) -> Self {
+        match (control.range, cfg.passes) {
+            (Some(_), Some(n)) => Batches::Fixed(PassSums::half(n)),
+            (None, Some(n)) if cfg.time.is_none() && cfg.target_error.is_none() => {
+                Batches::Fixed(PassSums::half(n))
+            }
+            _ => Batches::Open(Vec::new()),
+        }
+    }
+
+    fn is_first(&self, index: u32) -> bool {
+        matches!(self, Batches::Fixed(half) if index < *half)
+    }
+
+    fn after_pass(&mut self, sums: &PassSums) {
+        if let Batches::Open(snaps) = self {
+            if sums.passes.is_power_of_two() {
+                snaps.push((sums.passes, sums.snapshot()));
+                if snaps.len() > 2 {
+                    snaps.remove(0);
+                }
+            }
+        }
+    }
+
+    /// Names the first batch in `sums` (an open split's snapshot nearest half way).
+    fn name_first(&self, sums: &mut PassSums) {
+        if let Batches::Open(snaps) = self {
+            let n = sums.passes;
+            let best =
+                snaps.iter().filter(|(m, _)| *m < n).min_by_key(|(m, _)| (2 * *m as i64 - n as i64).abs());
+            if let Some((m, snap)) = best {
+                sums.set_first(snap, *m);
+            }
+        }
+    }
 }
 
 /// What a progressive render's bar says after `passes` passes: the passes and the photons
@@ -122,33 +235,6 @@ fn pass_seed(seed: u64, pass: u32) -> u64 {
     }
 }
 
-/// The sum of the passes' images.
-struct FilmSum {
-    sum: Film,
-}
-
-impl FilmSum {
-    fn new(width: usize, height: usize) -> Self {
-        FilmSum { sum: Film::new(width, height) }
-    }
-
-    fn add(&mut self, film: &Film) {
-        for (s, p) in self.sum.pixels.iter_mut().zip(&film.pixels) {
-            *s += *p;
-        }
-    }
-
-    /// The mean image of `passes` passes.
-    fn mean(&self, passes: u32) -> Film {
-        let mut film = self.sum.clone();
-        let n = passes.max(1) as f32;
-        for p in &mut film.pixels {
-            *p /= n;
-        }
-        film
-    }
-}
-
 /// Called with the number of passes done and the image so far.
 pub type Checkpoint<'a> = &'a (dyn Fn(u32, &Film) + Sync);
 
@@ -163,11 +249,14 @@ pub struct Control<'a> {
     pub checkpoint: Option<(u32, Checkpoint<'a>)>,
     /// When the time budget started (the process start, for `photonmap render`).
     pub started: Instant,
+    /// `(a, b)`: render passes `a..b` only (of the `cfg.passes` of the whole render), as
+    /// `--pass-range` asks; `None`: every pass from the first.
+    pub range: Option<(u32, u32)>,
 }
 
 impl Default for Control<'_> {
     fn default() -> Self {
-        Control { cancel: None, checkpoint: None, started: Instant::now() }
+        Control { cancel: None, checkpoint: None, started: Instant::now(), range: None }
     }
 }
 
@@ -187,19 +276,36 @@ struct Schedule<'a> {
     pass_seconds: f64,
     pass_start: Option<Instant>,
     progressive: bool,
+    /// A target error is set: without a pass count or a time budget, passes go on until the
+    /// estimate reaches it.
+    target: bool,
+    /// The estimated error reached `--target-error`.
+    reached: bool,
 }
 
 impl<'a> Schedule<'a> {
     pub fn new(cfg: &RenderConfig, control: Control<'a>) -> Self {
+        let passes = match control.range {
+            Some((a, b)) => Some(b.saturating_sub(a).max(1)),
+            None => cfg.passes,
+        };
+        let progressive = passes.is_some_and(|p| p > 1) || cfg.is_progressive() && control.range.is_none();
         Schedule {
-            passes: cfg.passes,
+            passes,
             time: cfg.time,
             control,
             done: 0,
             pass_seconds: 0.0,
             pass_start: None,
-            progressive: cfg.is_progressive(),
+            progressive,
+            target: cfg.target_error.is_some(),
+            reached: false,
         }
+    }
+
+    /// No further pass starts: the estimated error is below the target.
+    pub fn reached_target(&mut self) {
+        self.reached = true;
     }
 
     /// Passes finished so far.
@@ -237,12 +343,12 @@ impl<'a> Schedule<'a> {
     pub fn start_pass(&mut self) -> bool {
         let go = if self.done == 0 {
             true
-        } else if self.control.cancelled() {
+        } else if self.control.cancelled() || self.reached {
             false
         } else {
             let count_ok = match self.passes {
                 Some(p) => self.done < p,
-                None => self.time.is_some(),
+                None => self.time.is_some() || self.target,
             };
             let time_ok = match self.time {
                 Some(t) => {
@@ -339,11 +445,11 @@ mod tests {
     }
 
     impl PassRenderer for Counting {
-        fn render_pass(&mut self, pass: &Pass, _: &mut Stats, _: &dyn Progress) -> (Film, Counters) {
+        fn render_pass(&mut self, pass: &Pass, _: &mut Stats, _: &dyn Progress) -> (PassImage, Counters) {
             self.seen.push((pass.index, pass.samples.first, pass.seed));
             let mut film = Film::new(4, 4);
             film.pixels.iter_mut().for_each(|p| *p = glam::Vec3::splat((pass.index + 1) as f32));
-            (film, Counters { queries: 1, ..Default::default() })
+            (film.into(), Counters { queries: 1, ..Default::default() })
         }
 
         fn finish(&self, mean: Film, _passes: u32) -> Film {
@@ -359,7 +465,8 @@ mod tests {
         let c = cfg(Some(4), None);
         let mut stats = Stats::default();
         let mut integrator = Counting { seen: Vec::new() };
-        let (film, counters) = super::run(&c, control, &Quiet, &mut stats, &mut integrator);
+        let Rendered { film, sums, counters } = super::run(&c, control, &Quiet, &mut stats, &mut integrator);
+        assert_eq!((sums.passes, sums.first_passes), (4, 2));
         // Passes 1..=4 average to 2.5; the integrator's finish is applied to the image and to
         // every checkpoint (after 2 passes: mean 1.5).
         assert!(film.pixels.iter().all(|p| *p == glam::Vec3::splat(102.5)), "{:?}", film.pixels[0]);

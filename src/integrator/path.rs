@@ -17,10 +17,9 @@
 //! diffuse paths long before the default depth (`config::DEFAULT_DEPTH`), which only stops
 //! light trapped in glass.
 
-use super::passes::{camera_stage, Pass, PassRenderer};
+use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use crate::accel::{Accel, Hit};
 use crate::config::PathConfig;
-use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::light_sample;
 use crate::frame::{Counters, Frame, Progress};
@@ -54,14 +53,19 @@ impl<'f, 'a, A: Accel> PathTracer<'f, 'a, A> {
 }
 
 impl<A: Accel> PassRenderer for PathTracer<'_, '_, A> {
-    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+    fn render_pass(
+        &mut self,
+        pass: &Pass,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PassImage, Counters) {
         for stage in ["photons.indirect", "photons.caustic", "irradiance"] {
             stats.skip(stage, PATH_TRACER);
         }
         let frame = self.frame;
         let max_depth = self.cfg.max_depth;
         let mut pixels = vec![(); frame.camera.width as usize * frame.camera.height as usize];
-        camera_stage(stats, progress, frame.camera.height, "always (path tracer)", || {
+        let (film, c) = camera_stage(stats, progress, frame.camera.height, "always (path tracer)", || {
             let width = frame.camera.width as usize;
             for_each_pixel(
                 width,
@@ -77,7 +81,13 @@ impl<A: Accel> PassRenderer for PathTracer<'_, '_, A> {
                     mean.mean()
                 },
             )
-        })
+        });
+        (film.into(), c)
+    }
+
+    /// The path tracer's estimate is unbiased.
+    fn bias(&self) -> crate::film::sums::Bias {
+        crate::film::sums::Bias::Zero
     }
 }
 

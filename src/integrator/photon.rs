@@ -6,10 +6,9 @@
 //! estimate) or by final gathering.
 
 use super::maps::{Analysis, GatherPair, MapStages};
-use super::passes::{camera_stage, Pass, PassRenderer};
+use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use crate::accel::Accel;
 use crate::config::{Component, IndirectMode, PhotonConfig};
-use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
@@ -52,23 +51,22 @@ struct PassMaps {
 /// do not depend on the view, so a batch traces them once. Memory: every pass's maps at once.
 pub struct MapCache {
     keep: bool,
-    passes: RefCell<Vec<Rc<PassMaps>>>,
+    passes: RefCell<std::collections::BTreeMap<u32, Rc<PassMaps>>>,
 }
 
 impl MapCache {
     /// `keep`: keep each pass's maps once traced (a batch); otherwise nothing is kept.
     pub fn new(keep: bool) -> Self {
-        MapCache { keep, passes: RefCell::new(Vec::new()) }
+        MapCache { keep, passes: RefCell::new(Default::default()) }
     }
 
     fn get(&self, pass: u32) -> Option<Rc<PassMaps>> {
-        self.passes.borrow().get(pass as usize).cloned()
+        self.passes.borrow().get(&pass).cloned()
     }
 
     fn put(&self, pass: u32, maps: &Rc<PassMaps>) {
-        let mut passes = self.passes.borrow_mut();
-        if self.keep && passes.len() == pass as usize {
-            passes.push(Rc::clone(maps));
+        if self.keep {
+            self.passes.borrow_mut().entry(pass).or_insert_with(|| Rc::clone(maps));
         }
     }
 }
@@ -92,7 +90,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             stats.skip("photons.shared", why);
             return kept;
         }
-        let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass.seed, stats, progress);
+        let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass, stats, progress);
         let irradiance = self.precompute(stats, &maps, sites, pass.seed, progress);
         let made = Rc::new(PassMaps { maps, irradiance });
         self.cache.put(pass.index, &made);
@@ -182,7 +180,12 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
 }
 
 impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
-    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
+    fn render_pass(
+        &mut self,
+        pass: &Pass,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PassImage, Counters) {
         let made = self.pass_maps(pass, stats, progress);
         let shading = Shading {
             frame: self.frame,
@@ -193,7 +196,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
         };
         let camera = &self.frame.camera;
         let mut pixels = vec![(); camera.width as usize * camera.height as usize];
-        camera_stage(stats, progress, camera.height, "always", || {
+        let (film, c) = camera_stage(stats, progress, camera.height, "always", || {
             for_each_pixel(
                 camera.width as usize,
                 &mut pixels,
@@ -213,7 +216,8 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                     mean.mean()
                 },
             )
-        })
+        });
+        (film.into(), c)
     }
 }
 

@@ -15,17 +15,29 @@
 //! visible point to its `k`-th nearest photon (`--gather-photons`, bounded by
 //! `--gather-radius`): nothing is carried from pass to pass, so a pass's image depends only on
 //! (seed, pass index) and passes rendered anywhere can be averaged.
+//!
+//! Each pass also probes the bias of its photon term for the error estimate
+//! ([`Bias::Probed`]): in the same gather it sums the photons within the disc of half the area,
+//! `r²_i / 2`. For light that varies smoothly over the disc the bias of a disc estimate grows
+//! as its area (the Taylor expansion's second-order term; the first cancels over a symmetric
+//! disc: Hachisuka, Jarosz and Jensen 2010), so the two estimates differ by half the larger
+//! disc's bias and `2 (L_r − L_{r/√2})` is an estimate of that bias, zero in expectation where
+//! the photon density is uniform.
 
 use super::maps::{Analysis, GatherPair};
-use super::passes::{camera_stage, Pass, PassRenderer};
-use super::sppm::{camera_samples, first_radius2, flux_within, pass_maps, visible_point, Footprint, Scratch};
+use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
+use super::sppm::{
+    camera_samples, first_radius2, fluxes_within, pass_maps, visible_point, Footprint, Scratch,
+};
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
+use crate::film::sums::Bias;
 use crate::film::Film;
 use crate::frame::camera::for_each_pixel;
 use crate::frame::{Counters, Frame, Progress};
 use crate::material::face_forward;
 use crate::stats::Stats;
+use glam::Vec3;
 
 /// Pass-indexed progressive photon mapping over a render's passes.
 pub struct PassIndexed<'f, 'a, A: Accel> {
@@ -48,21 +60,27 @@ pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
 }
 
 impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
-    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass.seed, stats, progress);
+    fn render_pass(
+        &mut self,
+        pass: &Pass,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PassImage, Counters) {
+        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let scale = radius2_scale(pass.index, cfg.alpha);
         let camera = &frame.camera;
-        let mut pixels = vec![(); camera.width as usize * camera.height as usize];
+        // Each pixel's bias probe.
+        let mut probes = vec![Vec3::ZERO; camera.width as usize * camera.height as usize];
         let why = "visible points at the pass's radius, direct light";
-        camera_stage(stats, progress, camera.height, why, || {
+        let (film, c) = camera_stage(stats, progress, camera.height, why, || {
             let width = camera.width as usize;
             for_each_pixel(
                 width,
-                &mut pixels,
+                &mut probes,
                 pass.seed,
                 progress,
-                |x, y, _, rng, scratch: &mut Scratch, c| {
+                |x, y, probe, rng, scratch: &mut Scratch, c| {
                     let mut l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) else { return l };
                     if maps.indirect.is_empty() && maps.caustic.is_empty() {
@@ -75,17 +93,30 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                     };
                     let r2 = r2 * scale;
                     let footprint = Footprint::probe(frame, &v.hit, ns, r2, rng, c);
-                    let (phi, _) = flux_within(&maps, gathers, &v, ns, &footprint, c);
-                    let photons = phi / (std::f32::consts::PI * r2);
+                    let half = footprint.half();
+                    let (phi, phi_half, _) =
+                        fluxes_within(&maps, gathers, &v, ns, &footprint, Some(&half), c);
+                    let area = std::f32::consts::PI * r2;
+                    let photons = phi / area;
                     if photons.is_finite() {
                         l += photons;
+                        let d = 2.0 * (photons - phi_half / (0.5 * area));
+                        if d.is_finite() {
+                            *probe = d;
+                        }
                     } else {
                         c.nonfinite += 1;
                     }
                     l
                 },
             )
-        })
+        });
+        let bias_probe = Film { width: film.width, height: film.height, pixels: probes };
+        (PassImage { film, bias_probe: Some(bias_probe) }, c)
+    }
+
+    fn bias(&self) -> Bias {
+        Bias::Probed
     }
 }
 

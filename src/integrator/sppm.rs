@@ -33,7 +33,7 @@
 //! added.
 
 use super::maps::{Analysis, GatherPair, MapStages};
-use super::passes::{camera_stage, Pass, PassRenderer};
+use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use crate::accel::{Accel, Hit};
 use crate::config::ProgressiveConfig;
 use crate::film::Film;
@@ -86,12 +86,17 @@ impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
 }
 
 impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
-    fn render_pass(&mut self, pass: &Pass, stats: &mut Stats, progress: &dyn Progress) -> (Film, Counters) {
-        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass.seed, stats, progress);
+    fn render_pass(
+        &mut self,
+        pass: &Pass,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (PassImage, Counters) {
+        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass, stats, progress);
         let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
         let why = "visible points, direct light and progressive radius updates";
         let width = frame.camera.width as usize;
-        camera_stage(stats, progress, frame.camera.height, why, || {
+        let (film, c) = camera_stage(stats, progress, frame.camera.height, why, || {
             for_each_pixel(
                 width,
                 &mut self.states,
@@ -105,7 +110,13 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                     l
                 },
             )
-        })
+        });
+        (film.into(), c)
+    }
+
+    /// Its passes carry each pixel's photon statistics to the next.
+    fn independent_passes(&self) -> bool {
+        false
     }
 
     /// After `passes` passes the pixel is `Ld / n + τ / (n π R²)`.
@@ -134,13 +145,13 @@ pub(super) fn pass_maps<A: Accel>(
     frame: &Frame<'_, A>,
     cfg: &ProgressiveConfig,
     analysis: &Analysis,
-    seed: u64,
+    pass: &Pass,
     stats: &mut Stats,
     progress: &dyn Progress,
 ) -> PhotonMaps {
     let stages =
         MapStages { passes: &cfg.maps, indirect_unused: None, caustic_unused: None, site_stride: None };
-    let (maps, _) = stages.trace(frame, analysis, seed, stats, progress);
+    let (maps, _) = stages.trace(frame, analysis, pass, stats, progress);
     stats.skip("irradiance", "progressive photon mapping gathers at visible points");
     maps
 }
@@ -288,7 +299,24 @@ pub(super) fn flux_within(
     footprint: &Footprint,
     c: &mut Counters,
 ) -> (Vec3, u32) {
-    let mut phi = Vec3::ZERO;
+    let (phi, _, m) = fluxes_within(maps, gathers, v, ns, footprint, None, c);
+    (phi, m)
+}
+
+/// [`flux_within`] over `footprint` and, in the same gather, over `inner` (a footprint of the
+/// same visible point within a smaller radius, such as [`Footprint::half`]): both fluxes, each
+/// scaled to its own disc, and the photons over `footprint`.
+pub(super) fn fluxes_within(
+    maps: &PhotonMaps,
+    gathers: &GatherPair,
+    v: &Landing,
+    ns: Vec3,
+    footprint: &Footprint,
+    inner: Option<&Footprint>,
+    c: &mut Counters,
+) -> (Vec3, Vec3, u32) {
+    let (mut phi, mut phi_inner) = (Vec3::ZERO, Vec3::ZERO);
+    let inner_r2 = inner.map_or(0.0, |f| f.r2);
     let mut m = 0u32;
     c.timed(Part::Gathers, || {
         for map in maps.indirect.iter().chain(&maps.caustic) {
@@ -297,10 +325,14 @@ pub(super) fn flux_within(
                 ns,
                 footprint.r2,
                 gathers.indirect.flatten,
-                |offset, wi, power| {
+                |offset, wi, power, d2| {
                     let inside = footprint.contains(offset);
                     if inside {
-                        phi += v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
+                        let flux = v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
+                        phi += flux;
+                        if d2 < inner_r2 {
+                            phi_inner += flux;
+                        }
                     }
                     inside
                 },
@@ -310,9 +342,13 @@ pub(super) fn flux_within(
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
     if m == 0 {
         // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
-        return (Vec3::ZERO, 0);
+        return (Vec3::ZERO, Vec3::ZERO, 0);
     }
-    (v.beta * phi / footprint.share, m)
+    let inner = match inner {
+        Some(f) if f.share > 0.0 => v.beta * phi_inner / f.share,
+        _ => Vec3::ZERO,
+    };
+    (v.beta * phi / footprint.share, inner, m)
 }
 
 /// Directions in which a visible point probes its surface, evenly spaced around it.
@@ -342,6 +378,7 @@ pub(super) const PROBES: usize = 8;
 /// on the surface, so on a surface bounded by straight walls and convex edges the polygon
 /// stays on it, whatever the number of probes, and the photons counted and the area agree
 /// exactly; what it does not see are walls and edges between two probes that miss them.
+#[derive(Clone, Copy)]
 pub(super) struct Footprint {
     /// Tangent frame: the polygon's coordinates are along these.
     t: [Vec3; 2],
@@ -479,6 +516,23 @@ impl Footprint {
         let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
         let share = (area / (std::f32::consts::PI * r2)).clamp(0.0, 1.0);
         Footprint { t: [t1, t2], theta0, ends, cut, r2, share }
+    }
+
+    /// The footprint over the same surface within the disc of half the area (squared radius
+    /// `r2 / 2`), its `share` likewise of half the disc this one's `share` is of (the requested
+    /// one, before any shrinking in [`Footprint::probe`]), so that flux over `share` estimates
+    /// the same radiance over `π r² / 2` as over `π r²`, less the bias of the larger disc.
+    pub fn half(&self) -> Footprint {
+        let r2 = 0.5 * self.r2;
+        if !self.cut {
+            return Footprint { r2, ..*self };
+        }
+        let area = |r: f32| -> f32 {
+            (0..PROBES).map(|j| wedge_area(self.ends[j], self.ends[(j + 1) % PROBES], r)).sum()
+        };
+        let outer = area(self.r2.sqrt());
+        let ratio = if outer > 0.0 { area(r2.sqrt()) / outer } else { 0.0 };
+        Footprint { r2, share: (2.0 * self.share * ratio).clamp(0.0, 1.0), ..*self }
     }
 
     /// Whether a photon at `offset` from the visible point lies over the footprint (its

@@ -252,7 +252,7 @@ impl PhotonMap {
         count
     }
 
-    /// Calls `f(offset, wi, power)` for every photon strictly inside the squared radius `r2` of
+    /// Calls `f(offset, wi, power, d2)` (`d2`: its squared distance in that metric) for every photon strictly inside the squared radius `r2` of
     /// `x` in the region flattened along `ns` (unit) by `flatten`, arriving from the side of
     /// `ns` (`offset` is the photon's position minus `x`); `f` says whether it counted the
     /// photon, and the photons counted are returned. The fixed-radius query of progressive
@@ -265,13 +265,13 @@ impl PhotonMap {
         ns: Vec3,
         r2: f32,
         flatten: f32,
-        mut f: impl FnMut(Vec3, Vec3, Vec3) -> bool,
+        mut f: impl FnMut(Vec3, Vec3, Vec3, f32) -> bool,
     ) -> u32 {
         let mut count = 0;
-        self.tree.for_each_below_with(x, r2, flattened_metric(ns, flatten), |i, _| {
+        self.tree.for_each_below_with(x, r2, flattened_metric(ns, flatten), |i, d2| {
             let p = self.tree.get(i);
             let wi = pack::decode_dir_oct(p.dir);
-            if wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p)) {
+            if wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p), d2) {
                 count += 1;
             }
         });

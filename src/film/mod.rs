@@ -3,6 +3,9 @@
 //! then the sRGB transfer curve). Files are written atomically: to a temporary file beside the
 //! target, then renamed over it, so an existing image is only ever replaced by a complete new one.
 
+pub mod partial;
+pub mod sums;
+
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 
@@ -90,6 +93,36 @@ impl Film {
             }
             image.write().to_file(tmp).map_err(|e| e.to_string())
         })
+    }
+
+    /// [`write_exr_with`](Film::write_exr_with), and with `error` a fourth float32 channel
+    /// `error` holding its first channel (the per-pixel estimated error,
+    /// [`sums::PassSums::error_film`]).
+    pub fn write_exr_with_error(
+        &self,
+        path: &Path,
+        meta: &[(&str, String)],
+        error: Option<&Film>,
+    ) -> Result<(), ImageError> {
+        use exr::prelude::*;
+        let Some(error) = error else { return self.write_exr_with(path, meta) };
+        let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+        for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+            channels
+                .push(AnyChannel::new(name, FlatSamples::F32(self.pixels.iter().map(|p| p[c]).collect())));
+        }
+        channels.push(AnyChannel::new("error", FlatSamples::F32(error.pixels.iter().map(|p| p.x).collect())));
+        let mut attributes = LayerAttributes::default();
+        for (name, value) in meta {
+            attributes.other.insert(Text::from(*name), AttributeValue::Text(Text::from(value.as_str())));
+        }
+        let layer = Layer::new(
+            (self.width, self.height),
+            attributes,
+            Encoding::default(),
+            AnyChannels::sort(channels),
+        );
+        atomic_write(path, |tmp| Image::from_layer(layer).write().to_file(tmp).map_err(|e| e.to_string()))
     }
 
     /// The text attributes of an OpenEXR file's header (those [`write_exr_with`](Film::write_exr_with)
