@@ -1,10 +1,15 @@
 #!/usr/bin/env bash
 # Installs what photonmap needs on Debian or Ubuntu, and only what is missing: Embree (headers +
-# library), libclang for bindgen, pkg-config and a C toolchain for linking. Idempotent; when
+# library), libclang for bindgen, pkg-config and a C toolchain for linking; with `--test`, also
+# Slurm and munge (slurmctld, slurmd, sbatch: the scale-out test, tests/slurm.rs, runs a
+# one-node cluster). Idempotent; when
 # nothing is missing it only queries dpkg and returns in well under a second.
 set -euo pipefail
 
 packages=(libembree-dev libclang-dev pkg-config build-essential)
+if [ "${1:-}" = "--test" ]; then
+    packages+=(slurm-wlm munge)
+fi
 
 missing=()
 for p in "${packages[@]}"; do

@@ -4,7 +4,7 @@
 # against an Embree 4 library kept in target/ (scripts/embree4-run.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh
+bash scripts/setup.sh --test
 [ -f "$HOME/.cargo/env" ] && . "$HOME/.cargo/env"
 
 step() { printf '\n== %s\n' "$*" >&2; }
