@@ -39,15 +39,23 @@ if [ -z "$dir" ] || [ -z "$tasks" ] || [ -z "$passes" ] || [ -z "$scene" ] || [ 
 ((tasks <= passes)) || { echo "submit.sh: $tasks tasks for $passes passes: use at most one task a pass" >&2; exit 2; }
 photonmap=$(command -v "$photonmap") || { echo "submit.sh: no photonmap binary ($photonmap)" >&2; exit 2; }
 
+# NAME=( 'quoted' 'values' ), read back by `.` as the same words (none for an empty list).
+array() {
+    local name=$1 a
+    shift
+    printf '%s=(' "$name"
+    for a in "$@"; do printf ' %q' "$a"; done
+    printf ' )\n'
+}
 abs() { case $1 in /*) printf '%s' "$1" ;; *) printf '%s/%s' "$PWD" "$1" ;; esac; }
 mkdir -p "$dir/parts" "$dir/logs"
 dir=$(cd "$dir" && pwd)
 {
     printf 'PHOTONMAP=%q\nSCENE=%q\nOUTPUT=%q\nPASSES=%q\nTASKS=%q\n' \
         "$(abs "$photonmap")" "$(abs "$scene")" "$(abs "$output")" "$passes" "$tasks"
-    printf 'RENDER_ARGS=('; printf ' %q' "${render_args[@]}"; printf ' )\n'
-    printf 'MERGE_ARGS=('; printf ' %q' "${merge_args[@]}"; printf ' )\n'
-    printf 'SBATCH_ARGS=('; printf ' %q' "${sbatch_args[@]}"; printf ' )\n'
+    array RENDER_ARGS "${render_args[@]}"
+    array MERGE_ARGS "${merge_args[@]}"
+    array SBATCH_ARGS "${sbatch_args[@]}"
 } > "$dir/job.env"
 
 # The array, then the merge, waiting on it.
