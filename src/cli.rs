@@ -216,6 +216,11 @@ pub struct MergeArgs {
     /// Add the per-pixel estimated error as a channel `error`.
     #[arg(long)]
     pub error_layer: bool,
+    /// Write a partial film of the parts' passes (consecutive, not necessarily all) instead of
+    /// the image: a larger part, for merging in a tree (each node its own parts, then the
+    /// nodes' parts).
+    #[arg(long, conflicts_with_all = ["png", "error_layer", "partial", "target_error"])]
+    pub part: bool,
     /// Exit with status 3 (after writing) unless the estimated relative RMSE is at most this:
     /// a loop that renders more parts until the image is good enough stops on status 0.
     #[arg(long, value_name = "E")]
@@ -334,6 +339,11 @@ pub struct ConvergeArgs {
     /// furnace: 2); the renders take the scene camera's size.
     #[arg(long, value_name = "RADIANCE", conflicts_with_all = ["reference", "downsample"])]
     pub exact: Option<f32>,
+    /// The reference's own noise (its RMSE against the converged image, as its notes say):
+    /// taken out of each render's RMSE in quadrature for the true error that the estimated
+    /// error (the `est/true` column) is judged against [default: 0, and 0 with --exact].
+    #[arg(long, value_name = "RMSE", conflicts_with = "exact")]
+    pub reference_noise: Option<f64>,
     /// Box-downsample the reference by this factor first (renders get the smaller size).
     #[arg(long)]
     pub downsample: Option<usize>,

@@ -351,12 +351,38 @@ fn merge(args: cli::MergeArgs) -> Result<Finished> {
             bail!("{}: a part is also an output of the merge", part.display());
         }
     }
-    let merged = batch::merge::merge(&args.parts, args.partial).map_err(anyhow::Error::msg)?;
-    let film = merged.sums.mean();
-    let error = if args.error_layer { merged.sums.error_film() } else { None };
-    film.write_exr_with_error(&args.output, &merged.record, error.as_ref())?;
-    if let Some(png) = &args.png {
-        film.write_png_with(png, photonmap::film::Tonemap { exposure: args.exposure, curve: args.tonemap })?;
+    use batch::merge::Coverage;
+    let coverage = match (args.part, args.partial) {
+        (true, _) => Coverage::Contiguous,
+        (false, true) => Coverage::Partial,
+        (false, false) => Coverage::Whole,
+    };
+    let merged = batch::merge::merge(&args.parts, coverage).map_err(anyhow::Error::msg)?;
+    if args.part {
+        let record: Vec<(&str, String)> = merged
+            .record
+            .iter()
+            .map(|(k, v)| {
+                (*k, if *k == batch::meta::STATE { batch::run::PARTIAL_STATE.to_string() } else { v.clone() })
+            })
+            .collect();
+        photonmap::film::partial::PartialFilm::write(
+            &args.output,
+            &merged.sums,
+            merged.range.clone(),
+            merged.total,
+            &record,
+        )?;
+    } else {
+        let film = merged.sums.mean();
+        let error = if args.error_layer { merged.sums.error_film() } else { None };
+        film.write_exr_with_error(&args.output, &merged.record, error.as_ref())?;
+        if let Some(png) = &args.png {
+            film.write_png_with(
+                png,
+                photonmap::film::Tonemap { exposure: args.exposure, curve: args.tonemap },
+            )?;
+        }
     }
     let estimate = merged.sums.estimate();
     if let Some(path) = &args.stats {
@@ -547,6 +573,10 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     if let Some(b) = args.budgets.iter().find(|b| !(b.is_finite() && **b > 0.0 && **b <= 1e6)) {
         bail!("--budgets: {b} is not a number of seconds in (0, 1e6]");
     }
+    let reference_noise = args.reference_noise.unwrap_or(0.0);
+    if !(reference_noise.is_finite() && reference_noise >= 0.0) {
+        bail!("--reference-noise: {reference_noise} is not an RMSE (a number, 0 or more)");
+    }
     check_outputs([args.csv.as_ref(), args.plot.as_ref()].into_iter().flatten())?;
     let stem = args.scene.file_stem().unwrap_or_default().to_string_lossy().into_owned();
     let (w, h) = (reference.width as u32, reference.height as u32);
@@ -564,6 +594,7 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
         height: reference.height as u32,
         seed: args.seed,
         overrides: photonmap::config::RenderSettings { accel: args.accel, ..Default::default() },
+        reference_noise,
     };
     let pool = pool(args.threads)?;
     outln!("{}", converge::TABLE_HEADER);
@@ -587,6 +618,19 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     for &m in &study.methods {
         if let Some(s) = converge::slope(&points, m) {
             outln!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
+        }
+    }
+    for &m in &study.methods {
+        let ratios: Vec<&converge::Point> =
+            points.iter().filter(|p| p.method == m && p.calibration().is_some()).collect();
+        if let Some(first) = ratios.first() {
+            let (lo, hi) = ratios
+                .iter()
+                .filter_map(|p| p.calibration())
+                .fold((f64::MAX, 0.0f64), |(lo, hi), r| (lo.min(r), hi.max(r)));
+            let unseen =
+                if first.estimate_has_bias { "" } else { " (noise only: its bias is not estimated)" };
+            outln!("{:<16} estimated / true RMSE {lo:.2} to {hi:.2}{unseen}", m.name());
         }
     }
     if !peers.is_empty() {

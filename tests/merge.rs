@@ -256,3 +256,29 @@ fn pass_ranges_that_cannot_be_parts_are_refused() {
         assert!(!out.exists());
     }
 }
+
+#[test]
+fn parts_merged_in_a_tree_give_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let cornell = scene("cornell");
+    let s = settings("pppm", 8);
+    let single = d.join("single.exr");
+    ok(render(&cornell, &s, None, &single));
+    let files = parts(d, &cornell, &s, &["0..2", "2..3", "3..5", "5..8"]);
+    // Two nodes, each merging its own parts into one, then the two merged.
+    let (left, right) = (d.join("left.exr"), d.join("right.exr"));
+    ok(merge(&[&files[1], &files[0]], &left, &["--part"]));
+    ok(merge(&[&files[2], &files[3]], &right, &["--part"]));
+    let node = PartialFilm::read(&right).unwrap();
+    assert_eq!((node.range.clone(), node.total), (3..8, 8));
+    let out = d.join("tree.exr");
+    ok(merge(&[&right, &left], &out, &[]));
+    assert!(bits(&out) == bits(&single), "the tree's image differs from one process's");
+    // A part holds consecutive passes: a gap is refused, and so are the image's options.
+    let line = refused(merge(&[&files[0], &files[3]], &d.join("gap.exr"), &["--part"]));
+    assert!(line.contains("passes 2..5 are missing between 0..8"), "{line}");
+    assert!(!d.join("gap.exr").exists());
+    let out = merge(&[&files[0], &files[1]], &d.join("png.exr"), &["--part", "--png", "p.png"]);
+    assert_eq!(out.status.code(), Some(2), "{}", text(&out.stderr));
+}

@@ -3,18 +3,35 @@
 //! bit: the parts hold exact sums ([`crate::film::sums`]), so neither the split nor the order
 //! changes a bit. Parts of another scene, other settings, another view or another program
 //! version, overlapping passes and missing ones are refused, each naming the file and why.
+//!
+//! Parts holding consecutive passes also merge into one larger part ([`Coverage::Contiguous`]),
+//! so that many parts can be added up in a tree (on each node, then across nodes) rather than
+//! all read by one merge.
 
 use super::meta::{CAMERA, FINISHED, FRAME, SCENE_HASH, SETTINGS_HASH, STATE, VERSION, VIEW_HASH};
-use crate::film::partial::PartialFilm;
+use crate::film::partial::{PartHeader, PartialFilm};
 use crate::film::sums::PassSums;
 use serde::Serialize;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
+/// Which passes the parts must hold.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coverage {
+    /// Every pass of the render.
+    Whole,
+    /// Any: the missing ones are listed ([`Merged::missing`]).
+    Partial,
+    /// One run of consecutive passes, not necessarily from 0 or to the end (a larger part).
+    Contiguous,
+}
+
 /// The parts, added up.
 #[derive(Debug)]
 pub struct Merged {
     pub sums: PassSums,
+    /// From the first pass of the first part to the end of the last.
+    pub range: Range<u32>,
     /// Passes of the whole render.
     pub total: u32,
     /// Ranges of passes no part holds (empty unless merged with `partial`).
@@ -42,11 +59,13 @@ const SAME: [(&str, &str); 5] = [
     (FRAME, "another frame"),
 ];
 
-/// Reads and adds up `paths`; with `partial`, missing passes are allowed (not overlaps).
-pub fn merge(paths: &[PathBuf], partial: bool) -> Result<Merged, String> {
-    let mut parts: Vec<(PathBuf, PartialFilm)> = Vec::with_capacity(paths.len());
+/// Reads and adds up `paths`, refusing overlaps and, as `coverage` says, missing passes. Every
+/// header is checked before any pixel is read, and the parts are then read one at a time: a
+/// merge holds two images' sums, however many parts.
+pub fn merge(paths: &[PathBuf], coverage: Coverage) -> Result<Merged, String> {
+    let mut parts: Vec<(PathBuf, PartHeader)> = Vec::with_capacity(paths.len());
     for path in paths {
-        let part = PartialFilm::read(path).map_err(|e| e.to_string())?;
+        let part = PartialFilm::read_header(path).map_err(|e| e.to_string())?;
         let version = part.attributes.get(VERSION).map_or("an unknown version", String::as_str);
         if version != env!("CARGO_PKG_VERSION") {
             return Err(format!(
@@ -90,16 +109,39 @@ pub fn merge(paths: &[PathBuf], partial: bool) -> Result<Merged, String> {
     if next < total {
         missing.push(next..total);
     }
-    if !missing.is_empty() && !partial {
-        let list: Vec<String> = missing.iter().map(|r| format!("{}..{}", r.start, r.end)).collect();
-        return Err(format!(
-            "passes {} of {total} are missing (no part holds them); --partial merges the passes there are",
-            list.join(", ")
-        ));
+    let range = parts[order[0]].1.range.start..next;
+    let list = |gaps: &[Range<u32>]| {
+        gaps.iter().map(|r| format!("{}..{}", r.start, r.end)).collect::<Vec<_>>().join(", ")
+    };
+    match coverage {
+        Coverage::Whole if !missing.is_empty() => {
+            return Err(format!(
+                "passes {} of {total} are missing (no part holds them); --partial merges the passes there are",
+                list(&missing)
+            ));
+        }
+        Coverage::Contiguous => {
+            let gaps: Vec<Range<u32>> =
+                missing.iter().filter(|g| g.start > range.start && g.end < range.end).cloned().collect();
+            if !gaps.is_empty() {
+                return Err(format!(
+                    "passes {} are missing between {}..{}: a part holds consecutive passes",
+                    list(&gaps),
+                    range.start,
+                    range.end
+                ));
+            }
+        }
+        _ => {}
     }
-    let mut sums = PassSums::new(first.sums.width, first.sums.height, first.sums.bias);
+    let mut sums = PassSums::new(first.width, first.height, first.bias);
     for &i in &order {
-        sums.add(&parts[i].1.sums);
+        let (path, header) = &parts[i];
+        let part = PartialFilm::read(path).map_err(|e| e.to_string())?;
+        if part.range != header.range || part.attributes != header.attributes {
+            return Err(format!("{}: changed while being merged", path.display()));
+        }
+        sums.add(&part.sums);
     }
     let state = if missing.is_empty() {
         FINISHED.to_string()
@@ -119,11 +161,11 @@ pub fn merge(paths: &[PathBuf], partial: bool) -> Result<Merged, String> {
             end_pass: parts[i].1.range.end,
         })
         .collect();
-    Ok(Merged { sums, total, missing, record, parts: reports })
+    Ok(Merged { sums, range, total, missing, record, parts: reports })
 }
 
 /// Refuses `part` (at `path`) unless it is of the same render as `first`.
-fn check_same(path: &Path, part: &PartialFilm, first_path: &Path, first: &PartialFilm) -> Result<(), String> {
+fn check_same(path: &Path, part: &PartHeader, first_path: &Path, first: &PartHeader) -> Result<(), String> {
     let refuse = |what: &str, ours: &str, theirs: &str| {
         Err(format!("{}: {what} than {} ({ours}, not {theirs})", path.display(), first_path.display()))
     };
@@ -137,7 +179,7 @@ fn check_same(path: &Path, part: &PartialFilm, first_path: &Path, first: &Partia
     if part.total != first.total {
         return refuse("another pass count", &format!("{} passes", part.total), &format!("{}", first.total));
     }
-    let (a, b) = ((part.sums.width, part.sums.height), (first.sums.width, first.sums.height));
+    let (a, b) = ((part.width, part.height), (first.width, first.height));
     if a != b {
         return refuse("another size", &format!("{}x{}", a.0, a.1), &format!("{}x{}", b.0, b.1));
     }

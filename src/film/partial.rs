@@ -74,22 +74,14 @@ impl PartialFilm {
         atomic_write(path, |tmp| Image::from_layer(layer).write().to_file(tmp).map_err(|e| e.to_string()))
     }
 
-    /// Reads a partial film, checking it is one and whole.
-    pub fn read(path: &Path) -> Result<PartialFilm, ImageError> {
-        use exr::prelude::*;
+    /// Reads what a partial film's header says (not its pixels), checking it is one.
+    pub fn read_header(path: &Path) -> Result<PartHeader, ImageError> {
         let bad = |message: String| ImageError::Format { path: path.to_owned(), message };
-        let image = read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .all_channels()
-            .first_valid_layer()
-            .all_attributes()
-            .from_file(path)
-            .map_err(|e| exr_error(path, e))?;
-        let layer = &image.layer_data;
+        let meta = exr::meta::MetaData::read_from_file(path, false).map_err(|e| exr_error(path, e))?;
+        let header = meta.headers.first().ok_or_else(|| bad("no image in the file".into()))?;
         let mut attributes = BTreeMap::new();
-        for (name, value) in image.attributes.other.iter().chain(&layer.attributes.other) {
-            if let AttributeValue::Text(text) = value {
+        for (name, value) in header.shared_attributes.other.iter().chain(&header.own_attributes.other) {
+            if let exr::meta::attribute::AttributeValue::Text(text) = value {
                 attributes.insert(name.to_string(), text.to_string());
             }
         }
@@ -113,12 +105,34 @@ impl PartialFilm {
         }
         let bias_text = get(BIAS)?;
         let bias = Bias::from_name(bias_text).ok_or_else(|| bad(format!("{BIAS} {bias_text} unknown")))?;
-        let size = layer.size;
-        let (w, h) = (size.width(), size.height());
+        let size = header.layer_size;
+        Ok(PartHeader { range, total, bias, width: size.width(), height: size.height(), attributes })
+    }
+
+    /// Reads a partial film, checking it is one and whole.
+    pub fn read(path: &Path) -> Result<PartialFilm, ImageError> {
+        use exr::prelude::*;
+        let bad = |message: String| ImageError::Format { path: path.to_owned(), message };
+        let PartHeader { range, total, bias, width: w, height: h, attributes } = Self::read_header(path)?;
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(path)
+            .map_err(|e| exr_error(path, e))?;
+        let layer = &image.layer_data;
+        if (layer.size.width(), layer.size.height()) != (w, h) {
+            return Err(bad(format!(
+                "its pixels are {}x{}, its header says {w}x{h}",
+                layer.size.width(),
+                layer.size.height()
+            )));
+        }
         let mut sums = PassSums::new(w, h, bias);
         sums.passes = range.len() as u32;
-        // The passes of the range before the render's half way are the first batch's.
-        sums.first_passes = range.end.min(PassSums::half(total)).saturating_sub(range.start);
+        (sums.first_passes, sums.quarter_passes) = PassSums::batch_counts(range.clone(), total);
         for (k, name) in WORD_NAMES.iter().enumerate() {
             for word in 0..4 {
                 let channel_name = format!("{name}.{word}");
@@ -147,6 +161,18 @@ impl PartialFilm {
     }
 }
 
+/// What a partial film's header says: its passes, of how many, what its passes know of their
+/// bias, its size, and every text attribute (the render's record among them).
+#[derive(Clone, Debug)]
+pub struct PartHeader {
+    pub range: Range<u32>,
+    pub total: u32,
+    pub bias: Bias,
+    pub width: usize,
+    pub height: usize,
+    pub attributes: BTreeMap<String, String>,
+}
+
 /// `A..B` with `A < B`.
 pub fn parse_range(text: &str) -> Option<Range<u32>> {
     let (a, b) = text.split_once("..")?;
@@ -172,8 +198,8 @@ mod tests {
                 pixels: (0..6).map(|p| Vec3::splat(p as f32 * 1e5 - i as f32)).collect(),
             };
             let probe = Film { pixels: film.pixels.iter().map(|p| -*p * 1e-9).collect(), ..film.clone() };
-            // Of passes 4..7 of 10, pass 4 alone is in the first half.
-            sums.add_pass(&film, Some(&probe), 4 + i < PassSums::half(10));
+            // Of passes 4..7 of 10, pass 4 alone is in the first half, 5 and 6 in the third quarter.
+            sums.add_pass(&film, Some(&probe), Some(PassSums::quarter(4 + i, 10)));
         }
         PartialFilm::write(&path, &sums, 4..7, 10, &[("photonmap.scene_hash", "00ff".into())]).unwrap();
         let back = PartialFilm::read(&path).unwrap();

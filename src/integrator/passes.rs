@@ -4,7 +4,7 @@
 //! passes. [`run`] is the loop; an integrator only says what one pass does ([`PassRenderer`]).
 
 use crate::config::RenderConfig;
-use crate::film::sums::{Bias, PassSums};
+use crate::film::sums::{Bias, PassSums, Quarter};
 use crate::film::Film;
 use crate::frame::camera::PixelSamples;
 use crate::frame::{Counters, Progress, Quiet};
@@ -109,7 +109,7 @@ pub fn run(
         let samples = PixelSamples { spp: cfg.spp, first: index as u64 * cfg.spp as u64, seed: cfg.seed };
         let pass = Pass { index, seed: pass_seed(cfg.seed, index), samples };
         let (image, c) = integrator.render_pass(&pass, stats, inner);
-        sums.add_pass(&image.film, image.bias_probe.as_ref(), batches.is_first(index));
+        sums.add_pass(&image.film, image.bias_probe.as_ref(), batches.quarter(index));
         batches.after_pass(&sums);
         counters += c;
         let (units, due) = schedule.finish_pass();
@@ -142,52 +142,77 @@ pub fn run(
     Rendered { film: integrator.finish(sums.mean(), schedule.done()), sums, counters }
 }
 
-/// Which passes make the first of the two batches the error estimate compares
-/// ([`PassSums::estimate`]): with a pass count known in advance (and always for a
-/// `--pass-range` part, so that parts rendered apart agree), those before its half way;
-/// otherwise (a time budget, a target error) the passes up to a power of two, the one of the
-/// last two powers that splits the passes done most evenly, kept as a snapshot of the sums.
+/// Which passes make the two batches the error estimate compares, and their halves, the
+/// quarters ([`PassSums::estimate`], [`PassSums::convergence`]): with a pass count known in
+/// advance (and always for a `--pass-range` part, so that parts rendered apart agree), those
+/// before its half way and each batch's own half way ([`PassSums::quarter`]); otherwise (a time
+/// budget, a target error) the passes up to a power of two, the one of the last two powers that
+/// splits the passes done most evenly (the camera's sample sequence is best spread over a power
+/// of two), kept as a snapshot of the sums, and for the quarters the snapshots (of `R + G + B`)
+/// at the power of two or 1.5 times one nearest each batch's middle.
 enum Batches {
-    /// The first batch: passes before this index.
+    /// The render's pass count.
     Fixed(u32),
-    /// Snapshots at the last two powers of two: (passes, sums).
-    Open(Vec<(u32, Vec<[i128; 3]>)>),
+    /// Snapshots at the last two powers of two, (passes, sums), and of the totals at the last
+    /// six powers of two or 1.5 times powers of two (1, 2, 3, 4, 6, 8, 12, …).
+    Open { firsts: Vec<(u32, Vec<[i128; 3]>)>, totals: Vec<(u32, Vec<i128>)> },
 }
 
 impl Batches {
     fn new(cfg: &RenderConfig, control: Control<'_>) -> Self {
         match (control.range, cfg.passes) {
-            (Some(_), Some(n)) => Batches::Fixed(PassSums::half(n)),
-            (None, Some(n)) if cfg.time.is_none() && cfg.target_error.is_none() => {
-                Batches::Fixed(PassSums::half(n))
-            }
-            _ => Batches::Open(Vec::new()),
+            (Some(_), Some(n)) => Batches::Fixed(n),
+            (None, Some(n)) if cfg.time.is_none() && cfg.target_error.is_none() => Batches::Fixed(n),
+            _ => Batches::Open { firsts: Vec::new(), totals: Vec::new() },
         }
     }
 
-    fn is_first(&self, index: u32) -> bool {
-        matches!(self, Batches::Fixed(half) if index < *half)
+    fn quarter(&self, index: u32) -> Quarter {
+        match self {
+            Batches::Fixed(n) => Some(PassSums::quarter(index, *n)),
+            Batches::Open { .. } => None,
+        }
     }
 
     fn after_pass(&mut self, sums: &PassSums) {
-        if let Batches::Open(snaps) = self {
-            if sums.passes.is_power_of_two() {
-                snaps.push((sums.passes, sums.snapshot()));
-                if snaps.len() > 2 {
-                    snaps.remove(0);
+        if let Batches::Open { firsts, totals } = self {
+            let n = sums.passes;
+            if n.is_power_of_two() {
+                firsts.push((n, sums.snapshot()));
+                if firsts.len() > 2 {
+                    firsts.remove(0);
+                }
+            }
+            // 1, 2, 3, 4, 6, 8, 12, 16, …: the powers of two and 1.5 times them.
+            if n.is_power_of_two() || (n % 3 == 0 && (n / 3).is_power_of_two()) {
+                totals.push((n, sums.total_snapshot()));
+                if totals.len() > 6 {
+                    totals.remove(0);
                 }
             }
         }
     }
 
-    /// Names the first batch in `sums` (an open split's snapshot nearest half way).
+    /// Names the batches in `sums` (an open split's snapshots nearest half way and quarter
+    /// ways).
     fn name_first(&self, sums: &mut PassSums) {
-        if let Batches::Open(snaps) = self {
+        if let Batches::Open { firsts, totals } = self {
             let n = sums.passes;
             let best =
-                snaps.iter().filter(|(m, _)| *m < n).min_by_key(|(m, _)| (2 * *m as i64 - n as i64).abs());
+                firsts.iter().filter(|(m, _)| *m < n).min_by_key(|(m, _)| (2 * *m as i64 - n as i64).abs());
             if let Some((m, snap)) = best {
-                sums.set_first(snap, *m);
+                let m = *m;
+                let q1 = totals
+                    .iter()
+                    .filter(|(q, _)| *q < m)
+                    .min_by_key(|(q, _)| (2 * *q as i64 - m as i64).abs())
+                    .map(|(q, t)| (t.as_slice(), *q));
+                let q3 = totals
+                    .iter()
+                    .filter(|(q, _)| *q > m && *q < n)
+                    .min_by_key(|(q, _)| (2 * *q as i64 - (m + n) as i64).abs())
+                    .map(|(q, t)| (t.as_slice(), *q));
+                sums.set_batches((snap, m), q1, q3);
             }
         }
     }
@@ -454,6 +479,33 @@ mod tests {
 
         fn finish(&self, mean: Film, _passes: u32) -> Film {
             Film { pixels: mean.pixels.iter().map(|p| *p + 100.0).collect(), ..mean }
+        }
+    }
+
+    #[test]
+    fn a_render_of_unknown_length_names_its_batches_and_quarters_at_the_end() {
+        // A target error it never meets: the length is not known in advance, the batches are
+        // named from the snapshots: of 6 passes the first 2, the quarters 0..1 and 2..4.
+        for (passes, first, quarters) in [(6, 2, [1, 2]), (8, 4, [2, 2]), (13, 8, [4, 4]), (4, 2, [1, 1])] {
+            let c = RenderSettings { passes: Some(passes), target_error: Some(1e-12), ..Default::default() };
+            let c = c.resolve(4, 4).unwrap();
+            let mut integrator = Counting { seen: Vec::new() };
+            let rendered = super::run(&c, Control::default(), &Quiet, &mut Stats::default(), &mut integrator);
+            let sums = rendered.sums;
+            assert_eq!((sums.passes, sums.first_passes, sums.quarter_passes), (passes, first, quarters));
+            // The same sums as passes added with their quarters known: pass i is worth i + 1.
+            let mut known = PassSums::new(4, 4, sums.bias);
+            let q = |i: u32| match i {
+                _ if i < quarters[0] => 0,
+                _ if i < first => 1,
+                _ if i < first + quarters[1] => 2,
+                _ => 3,
+            };
+            for i in 0..passes {
+                let film = Film { width: 4, height: 4, pixels: vec![glam::Vec3::splat((i + 1) as f32); 16] };
+                known.add_pass(&film, None, Some(q(i)));
+            }
+            assert_eq!(sums, known, "{passes} passes");
         }
     }
 

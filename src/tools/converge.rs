@@ -10,6 +10,7 @@
 
 use crate::choice::Choice;
 use crate::config::{ColorMode, IndirectMode, IntegratorKind, RenderSettings};
+use crate::film::sums::Bias;
 use crate::film::{compare, Film};
 use crate::frame::Quiet;
 use crate::integrator::{render_scene_with, Control};
@@ -80,6 +81,20 @@ pub struct Point {
     pub rel_mse: f64,
     /// Mean of the image over the reference's, minus one.
     pub bias: f64,
+    /// The RMSE against the converged image: `rmse` less the reference's own noise, in
+    /// quadrature ([`Study::reference_noise`]).
+    pub true_rmse: f64,
+    /// The render's own estimate of its RMSE, from its passes alone (`None` from one pass).
+    pub estimated_rmse: Option<f64>,
+    /// Whether that estimate includes the bias: zero or probed, not unknown.
+    pub estimate_has_bias: bool,
+}
+
+impl Point {
+    /// The estimated RMSE over the true one (`None` without an estimate or a true error).
+    pub fn calibration(&self) -> Option<f64> {
+        self.estimated_rmse.filter(|_| self.true_rmse > 0.0).map(|e| e / self.true_rmse)
+    }
 }
 
 /// What a study needs besides the scene and the reference.
@@ -92,6 +107,9 @@ pub struct Study {
     pub seed: u64,
     /// Settings applied over every method's (e.g. `--accel`).
     pub overrides: RenderSettings,
+    /// The reference's own RMSE (its noise), taken out of each render's in quadrature for the
+    /// true error the estimate is judged against; 0 for an exact reference.
+    pub reference_noise: f64,
 }
 
 /// Why a study could not run.
@@ -130,6 +148,7 @@ pub fn run(
             let out = render_scene_with(scene, &cfg, &Quiet, control)?;
             let seconds = started.elapsed().as_secs_f64();
             let (rmse, rel_mse) = compare(&out.film, reference).expect("sizes checked above");
+            let estimate = out.sums.estimate();
             let point = Point {
                 method,
                 budget,
@@ -138,6 +157,9 @@ pub fn run(
                 rmse,
                 rel_mse,
                 bias: out.film.mean() / reference.mean() - 1.0,
+                true_rmse: (rmse * rmse - study.reference_noise.powi(2)).max(0.0).sqrt(),
+                estimated_rmse: estimate.map(|e| e.rmse),
+                estimate_has_bias: estimate.is_some_and(|e| e.bias != Bias::Unknown),
             };
             report(&point);
             points.push(point);
@@ -169,12 +191,17 @@ pub fn slope(points: &[Point], method: Method) -> Option<f64> {
 }
 
 /// The header of [`table_row`]'s table.
-pub const TABLE_HEADER: &str = "method           budget s   time s  passes      rmse   rel_mse     mean";
+pub const TABLE_HEADER: &str =
+    "method           budget s   time s  passes      rmse   rel_mse     mean  est rmse  est/true";
 
-/// One row of the printed table.
+/// One row of the printed table: the estimate over the true error last, marked `*` where the
+/// estimate leaves out a bias it cannot see (two-pass photon mapping, sppm).
 pub fn table_row(p: &Point) -> String {
+    let estimate = p.estimated_rmse.map_or_else(|| format!("{:>9}", "-"), |e| format!("{e:>9.5}"));
+    let ratio = p.calibration().map_or_else(|| format!("{:>9}", "-"), |r| format!("{r:>9.2}"));
+    let unseen = if p.estimated_rmse.is_some() && !p.estimate_has_bias { "*" } else { "" };
     format!(
-        "{:<16} {:>8.2} {:>8.2} {:>7} {:>9.5} {:>9.5} {:>+7.2}%",
+        "{:<16} {:>8.2} {:>8.2} {:>7} {:>9.5} {:>9.5} {:>+7.2}% {estimate} {ratio}{unseen}",
         p.method.name(),
         p.budget,
         p.seconds,
@@ -187,18 +214,23 @@ pub fn table_row(p: &Point) -> String {
 
 /// The points as CSV, with a header line.
 pub fn csv(points: &[Point]) -> String {
-    let mut s = String::from("method,budget_seconds,seconds,passes,rmse,rel_mse,bias\n");
+    let mut s = String::from(
+        "method,budget_seconds,seconds,passes,rmse,rel_mse,bias,true_rmse,estimated_rmse,estimate_has_bias\n",
+    );
     for p in points {
+        let estimate = p.estimated_rmse.map_or(String::new(), |e| format!("{e:.6}"));
         let _ = writeln!(
             s,
-            "{},{},{:.4},{},{:.6},{:.6},{:.6}",
+            "{},{},{:.4},{},{:.6},{:.6},{:.6},{:.6},{estimate},{}",
             p.method.name(),
             p.budget,
             p.seconds,
             p.passes,
             p.rmse,
             p.rel_mse,
-            p.bias
+            p.bias,
+            p.true_rmse,
+            p.estimate_has_bias
         );
     }
     s
@@ -350,7 +382,18 @@ mod tests {
     use super::*;
 
     fn point(method: Method, seconds: f64, rmse: f64) -> Point {
-        Point { method, budget: seconds, seconds, passes: 1, rmse, rel_mse: 0.0, bias: 0.0 }
+        Point {
+            method,
+            budget: seconds,
+            seconds,
+            passes: 1,
+            rmse,
+            rel_mse: 0.0,
+            bias: 0.0,
+            true_rmse: rmse,
+            estimated_rmse: None,
+            estimate_has_bias: false,
+        }
     }
 
     #[test]
