@@ -23,12 +23,13 @@ for r in 0..1 1..3 3..4; do
     "$bin" render "$scene" "${args[@]}" --pass-range "$r" -o "$dir/part-${r/../-}.exr" \
         --stats "$dir/part-${r/../-}.json" --quiet
 done
-start=$(date +%s.%N)
-"$bin" merge "$dir"/part-0-1.exr "$dir"/part-1-3.exr -o "$dir/two.exr" 2>/dev/null
-two=$(echo "$(date +%s.%N) - $start" | bc)
-start=$(date +%s.%N)
-"$bin" merge "$dir"/part-*.exr -o "$dir/three.exr" 2>/dev/null
-three=$(echo "$(date +%s.%N) - $start" | bc)
+# --partial: the parts hold 4 of the render's passes.
+start=$EPOCHREALTIME
+"$bin" merge "$dir"/part-0-1.exr "$dir"/part-1-3.exr --partial -o "$dir/two.exr" 2>/dev/null
+two=$(python3 -c "print($EPOCHREALTIME - $start)")
+start=$EPOCHREALTIME
+"$bin" merge "$dir"/part-*.exr --partial -o "$dir/three.exr" 2>/dev/null
+three=$(python3 -c "print($EPOCHREALTIME - $start)")
 python3 - "$dir" "$passes" "$width" "$height" "$bandwidth" "$two" "$three" "$(nproc)" <<'PY'
 import json, math, os, sys
 d, passes, w, h, bandwidth, two, three, cores = sys.argv[1:]
@@ -45,18 +46,25 @@ print(f"  a pass {per_pass:.1f} s, start-up {startup:.1f} s, a part {size / 1e6:
       f"merge {merge_part:.2f} s a part + {merge_fixed:.2f} s (writing the image)")
 print(f"  assumed: workers like this machine, {passes} passes split evenly, parts {size / 1e6:.0f} MB each "
       f"whatever their pass count, {bandwidth * 8 / 1e9:.0f} Gb/s into a merging node, tree fan-in 8\n")
-print("| workers | passes each | render s | one merge s | tree merge s | wall s (tree) | speed-up | bytes moved |")
+print("| workers | passes each | render s | one merge s | tree merge s | wall s (the faster merge) | speed-up | bytes moved (tree) |")
 print("|---|---|---|---|---|---|---|---|")
 base = None
 for workers in [1, 8, 64, 512]:
     each = math.ceil(passes / workers)
     render = startup + each * per_pass
     fetch = size / bandwidth + merge_part
-    flat = merge_fixed + workers * fetch if workers > 1 else merge_fixed + merge_part
-    levels = max(1, math.ceil(math.log(workers, 8) - 1e-9)) if workers > 1 else 1
-    tree = merge_fixed + levels * min(8, workers) * fetch if workers > 1 else flat
-    wall = render + min(flat, tree)
+    # One process renders every pass and writes the image itself: no merge.
+    flat = merge_fixed + workers * fetch if workers > 1 else 0.0
+    # A tree of merges, fan-in 8: each level's merges run side by side, each reading 8 parts
+    # and writing one (a part, or at the top the image: merge_fixed either way).
+    levels, tree, moved, count = 0, 0.0, 0.0, workers
+    while count > 1:
+        fan = min(8, count)
+        tree += fan * fetch + merge_fixed
+        moved += count * size
+        count = math.ceil(count / 8)
+        levels += 1
+    wall = render + (min(flat, tree) if workers > 1 else 0.0)
     base = base or wall
-    moved = workers * size * (1 if workers <= 8 else 1 + 1 / 8 * (levels - 1))
-    print(f"| {workers} | {each} | {render:.0f} | {flat:.0f} | {tree:.0f} | {wall:.0f} | {base / wall:.1f}x | {moved / 1e9:.1f} GB |")
+    print(f"| {workers} | {each} | {render:.0f} | {flat:.0f} | {tree:.0f} ({levels} levels) | {wall:.0f} | {base / wall:.1f}x | {moved / 1e9:.1f} GB |")
 PY

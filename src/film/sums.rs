@@ -292,11 +292,12 @@ impl PassSums {
     /// `1 / (2ρ - 1)`. A batch whose quarters differ in size by more than a factor 2 is not
     /// read; with none read (fewer than 4 passes) it is 1.
     ///
-    /// The rate is an image-wide model: measured against the true error (scripts/calibrate.sh),
-    /// it takes the Cornell box's estimate from 1.3–1.4 times the true error to 0.9–1.3, and
-    /// leaves the scenes whose noise is the photons' or the lights' (independent from pass to
-    /// pass) within a few per cent; on the caustics scene under pppm it reads γ about 0.15 too
-    /// high (0.73–0.89 of the true error, against 1.05–1.24 uncorrected).
+    /// The rate is an image-wide model: measured against the true error (scripts/calibrate.sh,
+    /// docs/scale-out.md), it takes the Cornell box's estimate from 1.1–1.4 times the true
+    /// error to 0.84–0.95, and leaves the scenes whose noise is the photons' or the lights'
+    /// (independent from pass to pass) within a few per cent; where pppm's bias drifts over the
+    /// passes (its radii shrink), the quarters differ by that drift too and it reads γ high
+    /// (the caustics scene: 0.72–1.03 of the true error, against 1.05–1.24 uncorrected).
     pub fn convergence(&self) -> f64 {
         let (n, m) = (self.passes, self.first_passes);
         if m == 0 || m >= n {
