@@ -8,7 +8,7 @@ import os
 import sys
 
 d = sys.argv[1]
-order = ["furnace", "cornell", "caustics", "pointlight", "sunroom", "doorway", "bunny", "glassknot", "faraway"]
+order = ["furnace", "cornell", "caustics", "pointlight", "sunroom", "sunroom-portal", "doorway", "bunny", "glassknot", "faraway"]
 names = sorted(f[:-4] for f in os.listdir(d) if f.endswith(".csv"))
 names = [n for n in order if n in names] + [n for n in names if n not in order]
 print("| scene | method | budget s | passes | true RMSE | estimated RMSE | est / true |")
