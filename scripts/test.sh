@@ -7,7 +7,9 @@ cd "$(dirname "$0")/.."
 bash scripts/setup.sh --test
 [ -f "$HOME/.cargo/env" ] && . "$HOME/.cargo/env"
 
-step() { printf '\n== %s\n' "$*" >&2; }
+# Each step says how long the run has taken so far (to see what the suite's time goes to).
+start=$SECONDS
+step() { printf '\n== %s (at %d min %02d s)\n' "$*" $(((SECONDS - start) / 60)) $(((SECONDS - start) % 60)) >&2; }
 
 step "format"
 cargo fmt --all -- --check
@@ -26,3 +28,4 @@ cargo test --locked
 # Last: it rebuilds photonmap (only) in target/ against Embree 4.
 step "Embree 4: unit, agreement and stress tests against Intel's Embree 4.3.3 library"
 bash scripts/embree4-run.sh
+step "done"
