@@ -95,6 +95,12 @@ const PROBE: usize = 6;
 const PROBE_SQUARES: usize = 9;
 const QUARTERS: [usize; 2] = [10, 11];
 
+/// `R + G + B` of three fixed-point sums (what the quarters keep).
+#[inline]
+fn total(rgb: &[i128]) -> i128 {
+    rgb.iter().fold(0i128, |t, &c| t.saturating_add(c))
+}
+
 /// Which quarter of a render's passes a pass is in: 0 and 1 halve the first batch, 2 and 3
 /// the second ([`PassSums::quarter`]); `None` while the batches are not known yet (a render
 /// whose length is not: [`PassSums::set_batches`] names them at the end).
@@ -153,18 +159,17 @@ impl PassSums {
         for (i, v) in self.values.iter_mut().enumerate() {
             let x = film.pixels[i].as_dvec3();
             let d = probe.map_or(Vec3::ZERO, |p| p.pixels[i]).as_dvec3();
+            let q = [fixed(x[0]), fixed(x[1]), fixed(x[2])];
             for c in 0..3 {
-                let q = fixed(x[c]);
-                v[c] = v[c].saturating_add(q);
+                v[c] = v[c].saturating_add(q[c]);
                 if first {
-                    v[FIRST + c] = v[FIRST + c].saturating_add(q);
+                    v[FIRST + c] = v[FIRST + c].saturating_add(q[c]);
                 }
                 v[PROBE + c] = v[PROBE + c].saturating_add(fixed(d[c]));
             }
             v[PROBE_SQUARES] = v[PROBE_SQUARES].saturating_add(fixed(d.length_squared()));
             if let Some(k) = quarter_word {
-                let total = (0..3).fold(0i128, |t, c| t.saturating_add(fixed(x[c])));
-                v[QUARTERS[k]] = v[QUARTERS[k]].saturating_add(total);
+                v[QUARTERS[k]] = v[QUARTERS[k]].saturating_add(total(&q));
             }
         }
         self.passes += 1;
@@ -183,7 +188,7 @@ impl PassSums {
 
     /// What a quarter wants of the passes so far: `R + G + B` of each pixel.
     pub fn total_snapshot(&self) -> Vec<i128> {
-        self.values.iter().map(|v| v[0].saturating_add(v[1]).saturating_add(v[2])).collect()
+        self.values.iter().map(|v| total(&v[..3])).collect()
     }
 
     /// Names the batches of a render whose passes were added with no quarter: the first `m`
@@ -199,7 +204,7 @@ impl PassSums {
         let (m, snapshot) = (first.1, first.0);
         for (i, (v, s)) in self.values.iter_mut().zip(snapshot).enumerate() {
             v[FIRST..FIRST + 3].copy_from_slice(s);
-            let first_total = s[0].saturating_add(s[1]).saturating_add(s[2]);
+            let first_total = total(s);
             v[QUARTERS[0]] = quarter1.map_or(0, |(q, _)| q[i]);
             v[QUARTERS[1]] = quarter3.map_or(0, |(q, _)| q[i].saturating_sub(first_total));
         }
@@ -321,8 +326,8 @@ impl PassSums {
         };
         let (mut halves, mut quarters) = (0.0f64, 0.0f64);
         for v in &self.values {
-            let all = v[0].saturating_add(v[1]).saturating_add(v[2]);
-            let one = v[FIRST].saturating_add(v[FIRST + 1]).saturating_add(v[FIRST + 2]);
+            let all = total(&v[..3]);
+            let one = total(&v[FIRST..FIRST + 3]);
             let two = all.saturating_sub(one);
             halves += spread(one, m, two, n - m);
             let (q1, q3) = (v[QUARTERS[0]], v[QUARTERS[1]]);
