@@ -19,7 +19,7 @@
 # test`'s profile (opt-level 2) in its target dir (CARGO_TARGET_DIR, default target/, whose
 # dependencies the default `cargo test` built; photonmap itself is rebuilt, so run this after
 # that step), or in release mode with EMBREE4_RELEASE=1: Embree's unit tests (lib, accel::embree),
-# the agreement tests (tests/agree_scenes.rs: Embree against the BVH ray by ray on the shipped
+# the agreement tests (modules of the one integration-test binary, tests/all.rs: tests/agree_scenes.rs: Embree against the BVH ray by ray on the shipped
 # scenes; tests/agree_cutouts.rs: the cut-out filter callbacks) and the stress suite (tests/stress.rs: `photonmap stress --quick`, Embree and the BVH).
 #
 # Env: EMBREE4_MIRROR (default http://deb.debian.org/debian), EMBREE4_RELEASE=1, CARGO_TARGET_DIR.
@@ -118,23 +118,23 @@ args=(--locked --features embree)
 if [ "${EMBREE4_RELEASE:-0}" = 1 ]; then
     args+=(--release)
 fi
-echo "embree4-run: EMBREE_DIR=$EMBREE cargo test ${args[*]} --lib --test agree_scenes --test agree_cutouts --test stress --no-run"
-cargo test "${args[@]}" --lib --test agree_scenes --test agree_cutouts --test stress --no-run ||
+echo "embree4-run: EMBREE_DIR=$EMBREE cargo test ${args[*]} --lib --test all --no-run"
+cargo test "${args[@]}" --lib --test all --no-run ||
     fail "the build against Embree $VERSION failed (see the errors above; a version mismatch is named there)"
 
 # Prove that build.rs took the Embree 4 path and linked embree4 (cargo reports the build script's
 # cfgs, env and libraries in its JSON messages, also when its output is cached), and that the
 # test binary loads the cached library.
-json=$(cargo test "${args[@]}" --lib --test agree_scenes --test agree_cutouts --test stress --no-run --message-format=json 2>/dev/null)
+json=$(cargo test "${args[@]}" --lib --test all --no-run --message-format=json 2>/dev/null)
 report=$(echo "$json" | grep '"reason":"build-script-executed"' | grep '"package_id":"[^"]*photonmap' | tail -n 1)
 [ -n "$report" ] || fail "no build-script report from cargo"
 echo "$report" | grep -q '"cfgs":\[[^]]*"embree4"' || fail "build.rs did not select cfg(embree4): $report"
 detected=$(echo "$report" | sed -n 's/.*\["PHOTONMAP_EMBREE_VERSION","\([^"]*\)"\].*/\1/p')
 [ "$detected" = "$VERSION" ] || fail "build.rs detected Embree '$detected', expected $VERSION"
 echo "$report" | grep -q '"linked_libs":\["dylib=embree4"\]' || fail "build.rs does not link embree4: $report"
-test_bin=$(echo "$json" | grep '"reason":"compiler-artifact"' | grep '"name":"agree_scenes"' |
+test_bin=$(echo "$json" | grep '"reason":"compiler-artifact"' | grep '"name":"all"' |
     sed -n 's/.*"executable":"\([^"]*\)".*/\1/p' | tail -n 1)
-[ -x "$test_bin" ] || fail "no agree_scenes test binary reported by cargo"
+[ -x "$test_bin" ] || fail "no integration-test binary (all) reported by cargo"
 loaded=$(ldd "$test_bin" | awk '/libembree4/{print $3}')
 [ "$(dirname "$loaded")" = "$EMBREE/lib" ] ||
     fail "$(basename "$test_bin") loads libembree4 from '${loaded:-nowhere}', not from $EMBREE/lib"
@@ -143,6 +143,6 @@ echo "embree4-run: build.rs: cfg(embree4), Embree $detected, linked embree4; tes
 echo "embree4-run: Embree's unit tests (accel::embree) against Embree $VERSION"
 cargo test "${args[@]}" --lib accel::embree || fail "Embree's unit tests failed against Embree $VERSION"
 echo "embree4-run: agreement tests and stress suite against Embree $VERSION"
-cargo test "${args[@]}" --test agree_scenes --test agree_cutouts --test stress ||
+cargo test "${args[@]}" --test all -- agree_scenes:: agree_cutouts:: stress:: ||
     fail "the agreement tests or the stress suite failed against Embree $VERSION"
 echo "embree4-run: OK: Embree $VERSION (headers $SUITE $DEB $DEB_VERSION, library from $WHEEL): unit, agreement and stress tests pass"

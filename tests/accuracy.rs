@@ -12,12 +12,12 @@
 //! map, a wrong kernel normalisation, a broken Fresnel term: each at least doubles the error,
 //! as measured while developing) fails.
 
+use crate::common;
 use photonmap::config::{ColorMode, IndirectMode, RenderSettings};
 use photonmap::film::{compare, Film};
 use photonmap::scene::Scene;
-mod common;
 
-use common::{reference, render_checked, scene};
+use crate::common::{reference, render_checked, scene};
 
 fn settings() -> RenderSettings {
     RenderSettings {

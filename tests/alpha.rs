@@ -6,10 +6,7 @@
 //! - An alpha texture opaque everywhere gives the image of no alpha texture, bit for bit.
 //! - A missing alpha texture is refused, naming the file.
 
-#[allow(dead_code)]
-mod common;
-
-use common::{on_threads, render_checked};
+use crate::common::{on_threads, render_checked};
 use photonmap::accel::AccelKind;
 use photonmap::config::RenderSettings;
 use photonmap::film::Film;

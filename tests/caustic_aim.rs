@@ -2,16 +2,13 @@
 //! is estimated from more tries until one does, so a marble far from a point light still
 //! casts its caustic; when even the last estimate finds none, the render says so.
 
+use crate::common::render_checked;
 use photonmap::config::RenderSettings;
 use photonmap::geometry::Vec3;
 use photonmap::light::LightDesc;
 use photonmap::material::Material;
 use photonmap::scene::Scene;
 use photonmap::tools::stress::scenes::{camera, Builder};
-#[allow(dead_code)]
-mod common;
-
-use common::render_checked;
 
 /// An octahedron of "radius" `r` around `c`: the smallest closed glass object.
 fn octahedron(b: &mut Builder, c: Vec3, r: f32, material: u32) {

@@ -7,10 +7,9 @@
 //! - The photon mapper and the path tracer agree on it.
 //! - A black texture makes no light (and no panic); a missing one is a one-line error naming it.
 
-#[allow(dead_code)]
-mod common;
+use crate::common;
 
-use common::render_checked;
+use crate::common::render_checked;
 use glam::Vec3;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::Film;

@@ -6,10 +6,7 @@
 //! - A convex object of albedo 0.5 under a constant sky sees only sky: its radiance is 0.5.
 //! - Under an image sky with a small bright sun, photon mapping agrees with the path tracer.
 
-#[allow(dead_code)]
-mod common;
-
-use common::render_checked;
+use crate::common::render_checked;
 use glam::{Vec3, Vec4};
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::Film;

@@ -8,10 +8,9 @@
 //! - A constant PNG base-colour texture (file, buffer view or data URI) renders as its
 //!   constant bit for bit, the base colour factor multiplying it.
 
-#[allow(dead_code)]
-mod common;
+use crate::common;
 
-use common::render_checked;
+use crate::common::render_checked;
 use glam::{Mat4, Quat, Vec3};
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::Film;

@@ -7,16 +7,13 @@
 //! The BVH is used because its results depend only on this crate's code (Embree picks its
 //! instruction set at run time, and its last bits may differ between machines).
 //!
-//! To re-record after an intended change: `PHOTONMAP_RECORD_GOLDEN=1 cargo test --test golden`.
+//! To re-record after an intended change: `PHOTONMAP_RECORD_GOLDEN=1 cargo test --test all golden::`.
 
+use crate::common::{render_checked, scene};
 use photonmap::accel::AccelKind;
 use photonmap::config::{ColorMode, Component, IndirectMode, IntegratorKind, RenderSettings};
 use std::fmt::Write;
 use std::path::Path;
-#[allow(dead_code)]
-mod common;
-
-use common::{render_checked, scene};
 
 const SCENES: [&str; 4] = ["cornell", "caustics", "pointlight", "furnace"];
 

@@ -3,15 +3,14 @@
 //! its value (each photon's power is divided by the density of its sample); the same with the
 //! window declared a portal (`[[portal]]`).
 
+use crate::common;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::geometry::Vec3;
 use photonmap::light::{LightDesc, Portal};
 use photonmap::scene::Scene;
 use photonmap::tools::stress::scenes::{camera, diffuse, Builder};
-#[allow(dead_code)]
-mod common;
 
-use common::render_checked;
+use crate::common::render_checked;
 
 /// A room `[-1, 1] × [0, 2] × [-1, 1]` with a window `[-w, w] × [1 - w, 1 + w]` in its +z wall,
 /// on a ground of half-width 10, lit by a sun travelling in through the window; the camera

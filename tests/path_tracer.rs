@@ -2,13 +2,13 @@
 //! Cornell box against the independent reference (`tests/data/refs/`, Mitsuba 3, downsampled by
 //! 4), agreement with the photon mapper, and determinism across thread counts.
 
+use crate::common;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::compare;
 use photonmap::integrator::RenderOutput;
 use photonmap::scene::Scene;
-mod common;
 
-use common::{reference, render_checked, scene};
+use crate::common::{reference, render_checked, scene};
 
 fn path_settings() -> RenderSettings {
     RenderSettings {

@@ -2,13 +2,13 @@
 //! passes are added, a fixed seed gives the same image for any thread count, passes of the
 //! other integrators average, and Ctrl-C writes the image so far.
 
+use crate::common;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::{compare, Film};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-mod common;
 
-use common::{reference, render_checked, scene};
+use crate::common::{reference, render_checked, scene};
 
 fn sppm(passes: u32) -> RenderSettings {
     RenderSettings {

@@ -2,6 +2,8 @@
 //! skipping changes nothing in the image, caustic photons emitted without aiming give the same
 //! estimate as aimed ones, and the raw ray rates of `--stats` and `photonmap bench`.
 
+#[allow(dead_code)] // the reference images are not needed here
+use crate::common::{render_checked, scene};
 use photonmap::accel::{AccelKind, AccelOptions, AnyAccel};
 use photonmap::config::{CausticPass, Component, RenderSettings};
 use photonmap::frame::Quiet;
@@ -12,10 +14,6 @@ use photonmap::scene::Scene;
 use photonmap::stats::Stage;
 use photonmap::tools::bench::render_calibrated;
 use std::path::Path;
-#[allow(dead_code)] // the reference images are not needed here
-mod common;
-
-use common::{render_checked, scene};
 
 /// Small budgets: these tests are about which stages run, not about the image.
 fn quick() -> RenderSettings {

@@ -5,10 +5,7 @@
 //! - A coarse sphere with smooth normals under a distant light matches the analytic
 //!   Lambertian sphere at its terminator: no black facets where the smooth surface is lit.
 
-#[allow(dead_code)]
-mod common;
-
-use common::render_checked;
+use crate::common::render_checked;
 use glam::Vec3;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::Film;

@@ -7,10 +7,7 @@
 //! - Photons read the textures too: a box with a textured wall bleeds the texture's colour onto
 //!   the floor as the path tracer sees it.
 
-#[allow(dead_code)]
-mod common;
-
-use common::render_checked;
+use crate::common::render_checked;
 use glam::Vec3;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::film::Film;

@@ -3,15 +3,14 @@
 //! not depend on the thread count, and the light seen out of focus spreads over more pixels the
 //! wider the lens while keeping its power.
 
+use crate::common;
 use photonmap::accel::AccelKind;
 use photonmap::config::{Component, IntegratorKind, RenderSettings};
 use photonmap::film::Film;
 use photonmap::scene::Scene;
 use std::path::Path;
-#[allow(dead_code)]
-mod common;
 
-use common::{on_threads, render_checked, scene};
+use crate::common::{on_threads, render_checked, scene};
 
 /// `cornell-dof.toml` with its `aperture_radius` replaced by `aperture` metres.
 fn dof(aperture: f32) -> Scene {

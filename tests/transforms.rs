@@ -4,14 +4,11 @@
 //! only, would face the ceiling), each scored against the Mitsuba reference of the untouched
 //! box (flipped left to right for the mirror).
 
+use crate::common::{reference, render_checked};
 use photonmap::config::RenderSettings;
 use photonmap::film::{compare, Film};
 use photonmap::scene::Scene;
 use std::path::Path;
-#[allow(dead_code)]
-mod common;
-
-use common::{reference, render_checked};
 
 /// `cornell.toml` with `camera` replacing its eye and target lines and `transform` added to its
 /// `[[mesh]]`.
