@@ -92,7 +92,13 @@ pub fn direct_light<A: Accel>(
             }
             c.rays.shadow += 1;
             let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
-            let (le, light_pdf) = match s.trace(&ray, c) {
+            let found = c.timed(Part::Rays, || s.accel.intersect(&ray));
+            // Most BSDF rays land on surfaces that do not emit: known from the triangle's
+            // material, before the surface point is worked out.
+            if found.is_some_and(|h| s.scene.material(h.prim).emission() == Vec3::ZERO) {
+                continue;
+            }
+            let (le, light_pdf) = match found.and_then(|h| s.surface(h)) {
                 Some(y) => {
                     let mut le = s.scene.material(y.prim).emitted(y.n, -bs.wi);
                     if le == Vec3::ZERO {
