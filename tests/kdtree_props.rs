@@ -169,6 +169,28 @@ proptest! {
             prop_assert_eq!(count, pts.iter().filter(|&&x| metric(x - p) <= r * r).count());
         }
     }
+
+    /// A first search within a guessed radius finds the same neighbours as one search from the
+    /// full radius, whether the guess is too small (searched again), about right, or too large.
+    #[test]
+    fn knn_with_a_guessed_radius_matches_linear_scan(
+        pts in point_set(),
+        qs in vec(point(), 1..6),
+        n in (-1.0f32..1.0, -1.0f32..1.0, -1.0f32..1.0),
+        stretch in prop_oneof![Just(1.0f32), 1.0f32..50.0],
+        k in 1usize..70,
+        r in radius(),
+        guess in prop_oneof![Just(0.0f32), 1e-6f32..1.0, 1.0f32..1e4],
+    ) {
+        let normal = Vec3::new(n.0, n.1, n.2).try_normalize().unwrap_or(Vec3::Z);
+        let metric = flattened_metric(normal, stretch);
+        let tree = KdTree::build(pts.clone());
+        let mut out = Vec::new();
+        for p in queries(&pts, &qs) {
+            tree.knn_with_guess(p, k, r, guess * r * r, metric, &mut out);
+            check_knn(&tree, &out, &scan_knn(&pts, p, k, r, metric), p, metric)?;
+        }
+    }
 }
 
 #[test]

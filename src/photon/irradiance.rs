@@ -244,14 +244,18 @@ impl PrecomputedIrradiance {
             .enumerate()
             .flat_map_iter(|(block, chunk)| {
                 let mut scratch: Vec<Neighbor> = Vec::new();
+                // Consecutive sites are near each other: each map's search starts from the last
+                // one's radius (within the block only, so that a block's values do not depend
+                // on how the blocks are shared among threads).
+                let mut guesses = vec![0.0f32; indirect_maps.len()];
                 let out: Vec<_> = chunk
                     .iter()
                     .enumerate()
                     .map(|(j, &site)| {
                         let (pos, n) = (site.pos, site.n);
                         let [mut indirect, mut back] = [Vec3::ZERO; 2];
-                        for m in indirect_maps {
-                            let [f, b] = m.irradiance_sides(pos, n, gather, &mut scratch);
+                        for (m, guess) in indirect_maps.iter().zip(&mut guesses) {
+                            let [f, b] = m.irradiance_sides_near(pos, n, gather, guess, &mut scratch);
                             (indirect, back) = (indirect + f, back + b);
                         }
                         let caustic =

@@ -71,6 +71,11 @@ pub struct GatherParams {
     pub flatten: f32,
 }
 
+/// The squared radius a query near the last one first searches within, over the last one's:
+/// a radius 1.22 times as wide, enough for most Morton-order neighbours (a query that finds
+/// fewer than `k` photons within it searches again at the full radius).
+pub const GUESS_MARGIN: f32 = 1.5;
+
 /// One photon map.
 #[derive(Debug, Default)]
 pub struct PhotonMap {
@@ -193,7 +198,25 @@ impl PhotonMap {
         params: &GatherParams,
         scratch: &mut Vec<Neighbor>,
     ) -> [Vec3; 2] {
-        let Some(r2) = self.gather(x, ns, params, scratch) else { return [Vec3::ZERO; 2] };
+        self.irradiance_sides_near(x, ns, params, &mut 0.0, scratch)
+    }
+
+    /// [`PhotonMap::irradiance_sides`] for queries in sequence, each near the one before
+    /// (sites in Morton order): the search first tries within the squared radius `guess` (0:
+    /// none), which then receives [`GUESS_MARGIN`] times this query's. The same photons are
+    /// found (ties at the `k`-th distance aside), so the same estimate but for the rounding of
+    /// a sum taken in another order.
+    pub fn irradiance_sides_near(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        guess: &mut f32,
+        scratch: &mut Vec<Neighbor>,
+    ) -> [Vec3; 2] {
+        let found = self.gather_guessed(x, ns, params, *guess, scratch);
+        *guess = found.map_or(0.0, |r2| r2 * GUESS_MARGIN);
+        let Some(r2) = found else { return [Vec3::ZERO; 2] };
         let inv_r2 = 1.0 / r2;
         let (mut front, mut back) = (Vec3::ZERO, Vec3::ZERO);
         for nb in estimated(scratch, params) {
@@ -213,11 +236,25 @@ impl PhotonMap {
     /// from behind the surface (`wi . ns <= 0`) are left for the caller to reject.
     #[inline]
     fn gather(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> Option<f32> {
+        self.gather_guessed(x, ns, params, 0.0, scratch)
+    }
+
+    /// [`PhotonMap::gather`], the search tried first within the squared radius `guess` (0: not).
+    #[inline]
+    fn gather_guessed(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        guess: f32,
+        scratch: &mut Vec<Neighbor>,
+    ) -> Option<f32> {
         if self.tree.is_empty() {
             scratch.clear();
             return None;
         }
-        self.tree.knn_with(x, params.k, params.max_radius, flattened_metric(ns, params.flatten), scratch);
+        let metric = flattened_metric(ns, params.flatten);
+        self.tree.knn_with_guess(x, params.k, params.max_radius, guess, metric, scratch);
         if scratch.is_empty() {
             return None;
         }

@@ -124,6 +124,38 @@ impl<T: KdPoint> KdTree<T> {
         self.descend(p, limit, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
     }
 
+    /// [`KdTree::knn_with`], searching first within the squared metric `guess` only (when it
+    /// is below `max_radius²`): if `k` items lie strictly inside it, they are the `k` nearest
+    /// and the search never looked farther; otherwise it searches again out to `max_radius`. A
+    /// good guess (the radius of a nearby query's result, with a margin) skips the first,
+    /// wide part of a k-NN search, where the heap holds items that later ones evict. The items
+    /// found are the same as [`KdTree::knn_with`]'s (ties at the `k`-th distance aside), in
+    /// another order.
+    #[inline]
+    pub fn knn_with_guess<F: Fn(Vec3) -> f32 + Copy>(
+        &self,
+        p: Vec3,
+        k: usize,
+        max_radius: f32,
+        guess: f32,
+        dist2: F,
+        out: &mut Vec<Neighbor>,
+    ) {
+        out.clear();
+        if k == 0 || max_radius.is_nan() || max_radius < 0.0 {
+            return;
+        }
+        let full = inclusive_limit(max_radius * max_radius);
+        if guess > 0.0 && guess < full {
+            self.descend(p, guess, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+            if out.len() == k {
+                return;
+            }
+            out.clear();
+        }
+        self.descend(p, full, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+    }
+
     /// The nearest item that `accept` takes among the `k` items nearest to `p` within
     /// `max_radius`: what [`KdTree::knn`] followed by a scan of its results for the nearest
     /// accepted one returns (but for ties at equal distances), at about the cost of a nearest-
