@@ -3,7 +3,8 @@
 //! importance sampling (Veach 1997, power heuristic). Light sampling alone is poor where an
 //! emitter is close and large (the 1/d^2 of area sampling near a corner of the furnace) and
 //! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
-//! the two everywhere.
+//! the two everywhere. A BSDF sample whose ray can reach neither an emitter's bounds nor a
+//! sky is not cast: it would bring nothing (see `light::bounds`).
 
 use super::{Counters, Frame, Part, SurfaceHit};
 use crate::accel::Accel;
@@ -90,8 +91,12 @@ pub fn direct_light<A: Accel>(
             if bs.delta || bs.pdf <= 0.0 {
                 continue;
             }
-            c.rays.shadow += 1;
             let ray = Ray::new(hit.spawn(bs.wi), bs.wi);
+            // A ray that cannot reach an emitter or the sky brings nothing: not cast.
+            if !s.lights.may_find_light(ray.origin, ray.dir) {
+                continue;
+            }
+            c.rays.shadow += 1;
             let found = c.timed(Part::Rays, || s.accel.intersect(&ray));
             // Most BSDF rays land on surfaces that do not emit: known from the triangle's
             // material, before the surface point is worked out.

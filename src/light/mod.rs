@@ -11,6 +11,7 @@
 //! area lights), see [`EmissionSample::photon_power`]; divide by the number of photons shot.
 
 mod area;
+mod bounds;
 mod distant;
 mod environment;
 mod point;

@@ -2,6 +2,7 @@
 //! ray (by power), and a flat list of photon emitters where every emissive triangle is an
 //! emitter of its own (so the photon pass can stratify over each).
 
+use super::bounds::EmitterBounds;
 use super::LightDesc;
 use super::{build_lights, power_distribution, EmissionTextures, Light, LightSample, Portal};
 use crate::geometry::TriangleMesh;
@@ -40,6 +41,8 @@ pub struct LightSet {
     environment: Option<usize>,
     /// The portals distant lights emit through (and the photon pass cuts at).
     portals: Vec<Portal>,
+    /// Where the emissive triangles are.
+    emitter_bounds: EmitterBounds,
 }
 
 impl LightSet {
@@ -99,7 +102,8 @@ impl LightSet {
             }
         }
         emitters.retain(|e| e.power.max_element() > 0.0 && e.power.is_finite());
-        LightSet { lights, select, emitters, area, environment, portals: portals.to_vec() }
+        let emitter_bounds = EmitterBounds::new(mesh, tri_material, materials);
+        LightSet { lights, select, emitters, area, environment, portals: portals.to_vec(), emitter_bounds }
     }
 
     /// Whether there is nothing to sample.
@@ -120,6 +124,14 @@ impl LightSet {
     /// Whether BSDF-sampled rays can find light: emissive triangles, or a sky to escape to.
     pub fn has_hittable(&self) -> bool {
         self.area.is_some() || self.environment.is_some()
+    }
+
+    /// Whether a ray from `origin` along `dir` may find light: it can escape to a sky, or it
+    /// crosses the bounds of the emissive triangles. A ray for which this is false meets no
+    /// emitter and sees no sky (conservative: the converse does not hold).
+    #[inline]
+    pub fn may_find_light(&self, origin: Vec3, dir: Vec3) -> bool {
+        self.environment.is_some() || self.emitter_bounds.crossed_by(origin, dir)
     }
 
     /// Radiance a ray leaving the scene along `dir` (unit) sees: the sky's, or zero.
