@@ -118,7 +118,7 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
     use photonmap::config::Kernel;
     use photonmap::geometry::Vec3;
     use photonmap::photon::irradiance::{pick_sites, LookupScratch, PrecomputedIrradiance};
-    use photonmap::photon::map::{GatherParams, MapColor, PhotonHit, PhotonMap};
+    use photonmap::photon::map::{GatherParams, Hits, MapColor, PhotonHit, PhotonMap};
     let estimate = |k: f32| {
         let n = 100;
         let hits: Vec<PhotonHit> = (0..n * n)
@@ -130,7 +130,7 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
                 power: Vec3::new(1.0, 0.5, 0.25) * (k * 1e-4),
             })
             .collect();
-        let sites = pick_sites(std::slice::from_ref(&hits), 4);
+        let sites = pick_sites(&[Hits::from(hits.clone())], 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, (n * n) as u64);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
         let cache = PrecomputedIrradiance::build(

@@ -12,7 +12,7 @@
 //! are not stored).
 
 use super::kdtree::{KdPoint, KdTree, Neighbor};
-use super::map::{GatherParams, PhotonHit, PhotonMap};
+use super::map::{GatherParams, Hits, PhotonMap};
 use super::pack;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -209,11 +209,9 @@ pub struct SitePoint {
 }
 
 /// Every `stride`-th photon of each map, as sites.
-pub fn pick_sites(maps: &[Vec<PhotonHit>], stride: usize) -> Vec<SitePoint> {
+pub fn pick_sites(maps: &[Hits], stride: usize) -> Vec<SitePoint> {
     maps.iter()
-        .flat_map(|hits| {
-            hits.iter().step_by(stride.max(1)).map(|h| SitePoint { pos: h.pos, err: h.err, n: h.n })
-        })
+        .flat_map(|hits| hits.every(stride, |h| SitePoint { pos: h.pos, err: h.err, n: h.n }))
         .collect()
 }
 
@@ -269,12 +267,12 @@ impl PrecomputedIrradiance {
             })
             .collect();
         let largest = values
-            .iter()
+            .par_iter()
             .map(|(_, e, back)| e.direct.max(e.indirect).max(e.caustic).max(*back).max_element())
-            .fold(0.0, f32::max);
+            .reduce(|| 0.0, f32::max);
         let scale = pack::rgb9e5_scale(largest);
         let sites = values
-            .into_iter()
+            .into_par_iter()
             .map(|(site, e, back)| Site {
                 pos: site.pos.to_array(),
                 normal: pack::encode_dir_oct(site.n),
@@ -385,6 +383,7 @@ mod tests {
     use super::*;
     use crate::config::Kernel;
     use crate::photon::map::MapColor;
+    use crate::photon::map::PhotonHit;
 
     #[test]
     fn lookup_returns_the_nearest_site_with_a_matching_normal() {
@@ -410,7 +409,7 @@ mod tests {
                 });
             }
         }
-        let sites = pick_sites(std::slice::from_ref(&hits), 3);
+        let sites = pick_sites(&[Hits::from(hits.clone())], 3);
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
         let cache = PrecomputedIrradiance::build(
@@ -461,7 +460,7 @@ mod tests {
                     }
                 })
                 .collect();
-            let sites = pick_sites(std::slice::from_ref(&hits), 4);
+            let sites = pick_sites(&[Hits::from(hits.clone())], 4);
             let map = PhotonMap::build(hits, MapColor::Rgb, 30000);
             let params = GatherParams { k: 20, max_radius: 0.05, kernel: Kernel::Box, flatten: 8.0 };
             let cache = PrecomputedIrradiance::build(

@@ -52,6 +52,87 @@ pub struct PhotonHit {
     pub power: Vec3,
 }
 
+/// A pass's photons for one map, as its chunks traced them: in order, each chunk a vector of
+/// its own, so that nothing copies them into one (a million photons are 52 MB, and that copy
+/// was serial): the map packs them and the sites are picked from them in parallel.
+#[derive(Clone, Debug, Default)]
+pub struct Hits {
+    /// The chunks, none empty.
+    chunks: Vec<Vec<PhotonHit>>,
+    /// The index of each chunk's first photon in the whole sequence.
+    starts: Vec<usize>,
+    len: usize,
+}
+
+impl Hits {
+    /// The photons of `chunks`, in order.
+    pub fn from_chunks(chunks: impl IntoIterator<Item = Vec<PhotonHit>>) -> Self {
+        let chunks: Vec<Vec<PhotonHit>> = chunks.into_iter().filter(|c| !c.is_empty()).collect();
+        let mut starts = Vec::with_capacity(chunks.len());
+        let mut len = 0;
+        for c in &chunks {
+            starts.push(len);
+            len += c.len();
+        }
+        Hits { chunks, starts, len }
+    }
+
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The photons in order.
+    pub fn iter(&self) -> impl Iterator<Item = &PhotonHit> {
+        self.chunks.iter().flatten()
+    }
+
+    /// The photons, in parallel (in no particular order).
+    pub fn par_iter(&self) -> impl ParallelIterator<Item = &PhotonHit> {
+        self.chunks.par_iter().flat_map_iter(|c| c.iter())
+    }
+
+    /// `f` of every `stride`-th photon from the first, in order, worked out in parallel.
+    pub fn every<U: Send>(&self, stride: usize, f: impl Fn(&PhotonHit) -> U + Sync) -> Vec<U> {
+        let stride = stride.max(1);
+        self.chunks
+            .par_iter()
+            .zip(&self.starts)
+            .flat_map_iter(|(c, &start)| {
+                c.iter().skip((stride - start % stride) % stride).step_by(stride).map(&f)
+            })
+            .collect()
+    }
+
+    /// `f(photon)` in order into a vector of the same length, worked out in parallel, chunk by
+    /// chunk (`fill` is the value the vector starts with).
+    fn map<U: Copy + Send + Sync>(&self, fill: U, f: impl Fn(&PhotonHit) -> U + Sync) -> Vec<U> {
+        let mut out = vec![fill; self.len];
+        let mut rest = &mut out[..];
+        let mut pieces = Vec::with_capacity(self.chunks.len());
+        for c in &self.chunks {
+            let (piece, tail) = std::mem::take(&mut rest).split_at_mut(c.len());
+            pieces.push(piece);
+            rest = tail;
+        }
+        pieces.into_par_iter().zip(&self.chunks).for_each(|(piece, c)| {
+            for (o, h) in piece.iter_mut().zip(c) {
+                *o = f(h);
+            }
+        });
+        out
+    }
+}
+
+impl From<Vec<PhotonHit>> for Hits {
+    fn from(hits: Vec<PhotonHit>) -> Self {
+        Hits::from_chunks([hits])
+    }
+}
+
 /// What the power of a map's photons means.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MapColor {
@@ -92,25 +173,25 @@ pub struct PhotonMap {
 
 impl PhotonMap {
     /// Packs `hits` and builds the kd-tree (in parallel).
-    pub fn build(hits: Vec<PhotonHit>, color: MapColor, emitted: u64) -> Self {
-        // A fresh exact-size buffer: collecting in place would keep the larger allocation of
-        // `hits` alive for the life of the map.
+    pub fn build(hits: impl Into<Hits>, color: MapColor, emitted: u64) -> Self {
+        let hits = hits.into();
         let scale = match color {
             MapColor::Rgb => {
                 pack::rgb9e5_scale(hits.par_iter().map(|h| h.power.max_element()).reduce(|| 0.0, f32::max))
             }
             MapColor::Channel(_) => 1.0,
         };
-        // In parallel (a million photons take some 20 ms to pack on one thread).
-        let mut photons = Vec::with_capacity(hits.len());
-        photons.par_extend(hits.par_iter().map(|h| Photon {
+        // In parallel (a million photons take some 20 ms to pack on one thread), into a fresh
+        // exact-size buffer.
+        let empty = Photon { pos: [0.0; 3], dir: 0, power: 0 };
+        let photons = hits.map(empty, |h| Photon {
             pos: h.pos.to_array(),
             dir: pack::encode_dir_oct(h.wi),
             power: match color {
                 MapColor::Rgb => pack::rgb9e5_encode(h.power / scale),
                 MapColor::Channel(c) => h.power[c].to_bits(),
             },
-        }));
+        });
         drop(hits);
         PhotonMap { tree: KdTree::build(photons), color: Some(color), emitted, scale }
     }
@@ -422,7 +503,7 @@ mod tests {
         let n = 200_000;
         let side = 10.0f32;
         let power_each = 3.0 / n as f32; // total flux 3 W over 100 m^2: E = 0.03 W/m^2
-        let hits = (0..n)
+        let hits: Vec<PhotonHit> = (0..n)
             .map(|_| PhotonHit {
                 pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
                 n: Vec3::Y,
@@ -466,7 +547,7 @@ mod tests {
         let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
         let n = 200_000;
         let side = 10.0f32;
-        let hits = (0..n)
+        let hits: Vec<PhotonHit> = (0..n)
             .map(|_| PhotonHit {
                 pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
                 n: Vec3::Y,

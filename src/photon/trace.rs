@@ -35,7 +35,7 @@
 //! so the maps are identical for any number of threads.
 
 use super::guide::{EmissionGuide, EmitterPilot, Grid2, Guided, VisibleRegion, DEFENSIVE};
-use super::map::PhotonHit;
+use super::map::{Hits, PhotonHit};
 use super::portal::{Outside, PortalSet};
 use crate::accel::Accel;
 use crate::config::ColorMode;
@@ -66,7 +66,7 @@ pub enum Pass {
 /// paths were emitted for each, and the rays traced.
 #[derive(Debug, Default)]
 pub struct PassOutput {
-    pub maps: Vec<Vec<PhotonHit>>,
+    pub maps: Vec<Hits>,
     pub emitted: Vec<u64>,
     pub rays: u64,
     pub paths: u64,
@@ -464,14 +464,16 @@ pub fn trace_pass<A: Accel>(
             (out, rays, paths)
         })
         .collect();
-    let mut output = PassOutput { maps: vec![Vec::new(); n_maps], emitted, rays: 0, paths: 0 };
+    let mut output = PassOutput { maps: Vec::new(), emitted, rays: 0, paths: 0 };
+    let mut per_map: Vec<Vec<Vec<PhotonHit>>> = vec![Vec::with_capacity(results.len()); n_maps];
     for (maps, rays, paths) in results {
-        for (dst, src) in output.maps.iter_mut().zip(maps) {
-            dst.extend(src);
+        for (dst, src) in per_map.iter_mut().zip(maps) {
+            dst.push(src);
         }
         output.rays += rays;
         output.paths += paths;
     }
+    output.maps = per_map.into_iter().map(Hits::from_chunks).collect();
     output
 }
 
