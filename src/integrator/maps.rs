@@ -174,13 +174,22 @@ impl MapStages<'_> {
         progress.finish();
         stats.rays.photon += out.rays;
         // The same density of sites whatever the colour mode: per-channel maps split the photons
-        // three ways, so each contributes a third as many sites.
-        let sites = match self.site_stride {
-            Some(stride) => irradiance::pick_sites(&out.maps, stride * out.maps.len()),
-            None => Vec::new(),
-        };
-        let seen = count_seen(&out, &guide.region);
-        let maps = stats.run("kdtree.indirect", "balance the indirect map", |_| build_maps(out, p.color));
+        // three ways, so each contributes a third as many sites. Picked (and the seen photons
+        // counted) while the maps are built, which fills the cores the builds' serial steps
+        // leave idle.
+        let (maps, (seen, sites)) = stats.run("kdtree.indirect", "balance the indirect map", |_| {
+            rayon::join(
+                || build_maps(&out, p.color),
+                || {
+                    let sites = match self.site_stride {
+                        Some(stride) => irradiance::pick_sites(&out.maps, stride * out.maps.len()),
+                        None => Vec::new(),
+                    };
+                    (count_seen(&out, &guide.region), sites)
+                },
+            )
+        });
+        drop(out);
         record_maps(stats, "indirect", &maps, &seen);
         (drop_empty(stats, "indirect", maps), sites)
     }
@@ -403,8 +412,10 @@ impl MapStages<'_> {
         stats.rays.photon += out.rays;
         // (Learnt here only when no indirect pass runs: the region alone is read.)
         let region = &analysis.guide.get_or_init(|| self.guide(frame, None, seeds.render, stats)).region;
-        let seen = count_seen(&out, region);
-        let maps = stats.run("kdtree.caustic", "balance the caustic map", |_| build_maps(out, p.color));
+        let (maps, seen) = stats.run("kdtree.caustic", "balance the caustic map", |_| {
+            rayon::join(|| build_maps(&out, p.color), || count_seen(&out, region))
+        });
+        drop(out);
         record_maps(stats, "caustic", &maps, &seen);
         drop_empty(stats, "caustic", maps)
     }
@@ -448,17 +459,17 @@ impl GatherPair {
 }
 
 /// Packs and balances the maps of one pass.
-fn build_maps(out: trace::PassOutput, color: ColorMode) -> Vec<PhotonMap> {
+fn build_maps(out: &trace::PassOutput, color: ColorMode) -> Vec<PhotonMap> {
     out.maps
-        .into_iter()
-        .zip(out.emitted)
+        .iter()
+        .zip(out.emitted.iter().copied())
         .enumerate()
         .map(|(i, (hits, emitted))| {
             let c = match color {
                 ColorMode::Rgb => MapColor::Rgb,
                 ColorMode::PerChannel => MapColor::Channel(i),
             };
-            PhotonMap::build(hits, c, emitted)
+            PhotonMap::build_from(hits, c, emitted)
         })
         .collect()
 }

@@ -174,7 +174,11 @@ pub struct PhotonMap {
 impl PhotonMap {
     /// Packs `hits` and builds the kd-tree (in parallel).
     pub fn build(hits: impl Into<Hits>, color: MapColor, emitted: u64) -> Self {
-        let hits = hits.into();
+        Self::build_from(&hits.into(), color, emitted)
+    }
+
+    /// [`PhotonMap::build`] from photons the caller keeps.
+    pub fn build_from(hits: &Hits, color: MapColor, emitted: u64) -> Self {
         let scale = match color {
             MapColor::Rgb => {
                 pack::rgb9e5_scale(hits.par_iter().map(|h| h.power.max_element()).reduce(|| 0.0, f32::max))
@@ -192,7 +196,6 @@ impl PhotonMap {
                 MapColor::Channel(c) => h.power[c].to_bits(),
             },
         });
-        drop(hits);
         PhotonMap { tree: KdTree::build(photons), color: Some(color), emitted, scale }
     }
 
