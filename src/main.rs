@@ -456,7 +456,7 @@ fn check_outputs<'a>(paths: impl IntoIterator<Item = &'a PathBuf>) -> Result<()>
     let mut checked = std::collections::HashSet::new();
     for out in paths {
         if out.is_dir() {
-            bail!("{}: is a directory, not an image file", out.display());
+            bail!("{}: is a directory, not a file", out.display());
         }
         let dir = out.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
         if !checked.insert(dir.to_path_buf()) {

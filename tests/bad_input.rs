@@ -230,6 +230,7 @@ fn cases() -> Vec<Case> {
         Case { flags: &[("--png", "out.exr")], ..case("--png on the -o image", &["out.exr", "--png names a PNG file"]) },
         Case { flags: &[("--stats", "out.exr")], ..case("--stats on the -o image", &["out.exr", "--stats names an image"]) },
         Case { flags: &[("--stats", "/proc/s.json")], ..case("--stats where no file can be made", &["/proc/s.json", "cannot write"]) },
+        Case { flags: &[("--stats", ".")], ..case("--stats on a directory", &[".: is a directory, not a file"]) },
         Case { output: "out.png", flags: &[("--resume", "")], ..case("--resume with a PNG output", &["out.png", "--resume needs .exr"]) },
         // glTF: each error names the file and the JSON path at fault.
         Case {

@@ -128,10 +128,18 @@ fn resume_skips_finished_images_and_redoes_a_damaged_one() {
     assert!(ok, "{err}");
     assert_eq!([modified(0), modified(2)], before, "finished images are not rendered again");
     assert_eq!(pixels(&path(1)), original[1], "the damaged image is made again, the same");
-    // Another seed is another image: nothing is skipped.
+    // Said once, naming the file, and only for it.
+    assert_eq!(err.matches("rendering it again").count(), 1, "{err}");
+    assert!(err.contains("1.exr: its pixels do not read back whole"), "{err}");
+    // Another seed is another image: nothing is skipped, and each file replaced is named, as
+    // is one that is not an image at all.
+    fs::write(path(2), "notes, not an image").unwrap();
     let (ok, err) = render(&scene, &[&args[..], &["--resume", "--seed", "5"]].concat());
     assert!(ok, "{err}");
     assert_ne!(pixels(&path(0)), original[0]);
+    assert_eq!(err.matches("rendering it again").count(), 3, "{err}");
+    assert_eq!(err.matches("not this image finished").count(), 2, "{err}");
+    assert!(err.contains("2.exr: not an OpenEXR file"), "{err}");
 }
 
 #[test]

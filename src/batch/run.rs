@@ -135,11 +135,24 @@ fn write(
 /// Whether `job`'s output is this very image, finished and whole (its pixels read back); a
 /// missing PNG is made again from it.
 fn finished(job: &Job, meta: &ImageMeta, preview: Tonemap) -> Result<bool, ImageError> {
-    let Ok(attributes) = Film::read_exr_meta(&job.output) else { return Ok(false) };
-    if !meta.is_finished_in(&attributes) {
+    if !job.output.exists() {
         return Ok(false);
     }
-    let Ok(film) = Film::read_exr(&job.output) else { return Ok(false) };
+    // A file there that is not this image finished is replaced: said, since it may be a file
+    // of the user's that only happens to have the name.
+    let again = |why: &str| {
+        eprintln!("photonmap: warning: {}: {why}; rendering it again", job.output.display());
+        Ok(false)
+    };
+    let Ok(attributes) = Film::read_exr_meta(&job.output) else {
+        return again("not an OpenEXR file of this program's");
+    };
+    if !meta.is_finished_in(&attributes) {
+        return again(
+            "not this image finished (another scene, settings, view or version, or an unfinished render)",
+        );
+    }
+    let Ok(film) = Film::read_exr(&job.output) else { return again("its pixels do not read back whole") };
     if let Some(png) = job.png.as_ref().filter(|p| !p.exists()) {
         film.write_png_with(png, preview)?;
     }
