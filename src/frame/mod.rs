@@ -178,6 +178,10 @@ mod tests {
                 c.clock.gathers_ns as f64 / calls as f64
             })
             .fold(f64::INFINITY, f64::min);
-        assert!(per_call < 8.0, "{per_call} ns counted for an empty call, overhead {} ns", clock_overhead_ns());
+        assert!(
+            per_call < 8.0,
+            "{per_call} ns counted for an empty call, overhead {} ns",
+            clock_overhead_ns()
+        );
     }
 }
