@@ -5,6 +5,16 @@
 //! for narrow glossy lobes; BSDF sampling is poor for small lights; MIS keeps the better of
 //! the two everywhere. A BSDF sample whose ray can reach neither an emitter's bounds nor a
 //! sky is not cast: it would bring nothing (see `light::bounds`).
+//!
+//! Where MIS cannot pay, the BSDF sample is not taken at all and the light sample weighs 1 (an
+//! unbiased estimate either way; the choice depends on the point, not on the random numbers):
+//! at a Lambertian point that sees no sky and from which the emitters subtend less than
+//! [`MIS_MIN_SOLID_ANGLE`]. A cosine-distributed direction reaches them there with
+//! probability under `Ω / π` (a sixth at the threshold), so the BSDF sample is almost always
+//! wasted work (on the default Cornell box, 99.5 % of them met nothing, and sampling and
+//! testing them took a fifth of the camera stage); and light sampling, whose weight
+//! `cos cos' / d²` varies little over an emitter that subtends so little, is already the
+//! better of the two.
 
 use super::{Counters, Frame, Part, SurfaceHit};
 use crate::accel::Accel;
@@ -16,6 +26,24 @@ use crate::sampling::power_heuristic;
 use glam::Vec3;
 use rand::Rng;
 use rand_pcg::Pcg32;
+
+/// Below this bound on the solid angle of the emitters seen from a Lambertian point
+/// (steradians; [`crate::light::LightSet::emitters_solid_angle_bound`]), the point's direct
+/// light is sampled from the lights alone (see the module's documentation).
+pub const MIS_MIN_SOLID_ANGLE: f32 = 0.5;
+
+/// Whether the direct light at `hit` (material `m`) takes BSDF samples beside its light
+/// samples, combined by MIS: when BSDF samples can find light at all (emissive triangles, a
+/// sky), unless the point is Lambertian, sees no sky and the emitters subtend less than
+/// [`MIS_MIN_SOLID_ANGLE`] from it.
+#[inline]
+pub fn takes_bsdf_samples<A: Accel>(s: &Frame<'_, A>, hit: &SurfaceHit, m: &Material) -> bool {
+    let lights = s.lights;
+    if !lights.has_hittable() {
+        return false;
+    }
+    lights.has_sky() || m.lambertian().is_none() || !lights.emitters_subtend_less(hit.p, MIS_MIN_SOLID_ANGLE)
+}
 
 /// Shadow rays stop this fraction short of the light sample, so they never hit the emitter
 /// itself.
@@ -77,10 +105,16 @@ pub fn direct_light<A: Accel>(
     if s.lights.is_empty() {
         return Vec3::ZERO;
     }
-    let mis = s.lights.has_hittable();
+    let hittable = s.lights.has_hittable();
+    let mis = hittable && takes_bsdf_samples(s, hit, m);
     let mut sum = Vec3::ZERO;
     for _ in 0..n {
         sum += light_sample(s, hit, wo, m, mis, rng, c);
+        if hittable && !mis {
+            // The BSDF sample's numbers are drawn all the same, so that the rest of the camera
+            // path and the pixel's later samples take the numbers they would take with it.
+            let _: [f32; 3] = [rng.gen(), rng.gen(), rng.gen()];
+        }
         // BSDF sampling toward area lights and the sky.
         if mis {
             let Some(scattered) = hit.normals().sample(m, wo, rng.gen(), [rng.gen(), rng.gen()], Radiance)

@@ -134,6 +134,19 @@ impl LightSet {
         self.environment.is_some() || self.emitter_bounds.crossed_by(origin, dir)
     }
 
+    /// Whether the emissive triangles surely subtend less than `limit` steradians from `p`
+    /// (from a bound on their solid angle; a sky is not counted).
+    #[inline]
+    pub fn emitters_subtend_less(&self, p: Vec3, limit: f32) -> bool {
+        self.emitter_bounds.subtend_less(p, limit)
+    }
+
+    /// Whether there is a sky (an environment light) for rays to escape to.
+    #[inline]
+    pub fn has_sky(&self) -> bool {
+        self.environment.is_some()
+    }
+
     /// Radiance a ray leaving the scene along `dir` (unit) sees: the sky's, or zero.
     #[inline]
     pub fn escaped(&self, dir: Vec3) -> Vec3 {
