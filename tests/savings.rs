@@ -260,3 +260,20 @@ fn bench_command_and_render_stats_report_raw_rates() {
     assert!(v["rays_to_raw_ratio"].as_f64().unwrap() > 0.0);
     assert!(v["raw_rays"]["shadow"].as_f64().unwrap() > 0.0);
 }
+
+/// The indirect estimate is read at a quarter of a pixel's samples (at least 4): on the Cornell
+/// box, pixels of 64 samples (16 readings, weighted 4) average to what pixels that read it at
+/// each of their 4 samples give, and the count follows the rule.
+#[test]
+fn the_indirect_estimate_at_a_quarter_of_the_samples_keeps_its_mean() {
+    use photonmap::integrator::photon::indirect_samples;
+    let counts: Vec<u32> = [1, 3, 4, 8, 16, 17, 64].into_iter().map(indirect_samples).collect();
+    assert_eq!(counts, [1, 3, 4, 4, 4, 5, 16]);
+    let s = scene("cornell");
+    let indirect = |spp| {
+        let r = RenderSettings { component: Some(Component::Indirect), spp: Some(spp), ..quick() };
+        render_checked(&s, &r, 32).film.mean()
+    };
+    let (every, quarter) = (indirect(4), indirect(64));
+    assert!(every > 0.0 && ((quarter - every) / every).abs() < 0.01, "{quarter} vs {every}");
+}
