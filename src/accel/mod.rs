@@ -47,6 +47,16 @@ pub trait Accel: Send + Sync {
             *h = self.intersect(r);
         }
     }
+
+    /// Whether each ray of a batch of coherent rays (e.g. a pixel's shadow rays) is blocked,
+    /// `blocked[i]` for `rays[i]`, as [`Accel::occluded`] says. Backends with packet tracing
+    /// override this.
+    fn occluded_batch(&self, rays: &[Ray], blocked: &mut [bool]) {
+        assert_eq!(rays.len(), blocked.len(), "one answer per ray");
+        for (r, b) in rays.iter().zip(blocked.iter_mut()) {
+            *b = self.occluded(r);
+        }
+    }
 }
 
 crate::choice! {

@@ -10,7 +10,7 @@ use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use crate::accel::Accel;
 use crate::config::{Component, IndirectMode, PhotonConfig};
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
-use crate::frame::direct::direct_light;
+use crate::frame::direct::{direct_light, direct_light_with, ShadowRays, Shadows};
 use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
@@ -234,11 +234,20 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                     if let Some((centre, radius)) = batch.hit_bounds() {
                         scratch.sites.expect(centre, radius);
                     }
-                    let mut mean = SampleMean::default();
+                    // Each sample's radiance but for its light samples' shadow rays, which are
+                    // put off and cast together as packets (`Shadows`), then added in.
+                    let mut totals = std::mem::take(&mut scratch.totals);
+                    totals.clear();
                     for (j, (ray, hit)) in batch.rays.iter().zip(&batch.hits).enumerate() {
                         let indirect = if j < lookups { indirect_weight } else { 0.0 };
-                        mean.add(shading.radiance(*ray, *hit, indirect, rng, scratch, c), c);
+                        totals.push(shading.radiance(*ray, *hit, indirect, j as u32, rng, scratch, c));
                     }
+                    scratch.shadows.resolve(self.frame, &mut totals, c);
+                    let mut mean = SampleMean::default();
+                    for &l in &totals {
+                        mean.add(l, c);
+                    }
+                    scratch.totals = totals;
                     scratch.batch = batch;
                     mean.mean()
                 },
@@ -254,6 +263,9 @@ struct Scratch {
     batch: CameraBatch,
     neighbors: Vec<Neighbor>,
     sites: LookupScratch,
+    /// The pixel's shadow rays put off, and its samples' radiance.
+    shadows: Shadows,
+    totals: Vec<Vec3>,
 }
 
 /// What the camera pass of one pass reads.
@@ -271,11 +283,15 @@ impl<A: Accel> Shading<'_, '_, A> {
     /// emission seen directly or through mirrors and glass (direct light at diffuse surfaces
     /// comes from shadow rays instead), then the shading of the first diffuse or glossy
     /// surface, its indirect estimate weighted `indirect` (0: not read; [`INDIRECT_EVERY`]).
+    /// The light samples' shadow rays are put off into `scratch.shadows` for camera sample
+    /// `sample`: what they bring is not in the result.
+    #[allow(clippy::too_many_arguments)]
     fn radiance(
         &self,
         ray: Ray,
         first: Option<crate::accel::Hit>,
         indirect: f32,
+        sample: u32,
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         c: &mut Counters,
@@ -290,13 +306,16 @@ impl<A: Accel> Shading<'_, '_, A> {
             }
         });
         if let Some(v) = landing {
-            l += v.beta * self.shade(&v.hit, v.wo, &v.m, indirect, rng, scratch, c);
+            let later = Some((sample, v.beta));
+            l += v.beta * self.shade(&v.hit, v.wo, &v.m, indirect, later, rng, scratch, c);
         }
         l
     }
 
     /// Reflected radiance toward `wo` at a diffuse or glossy surface, the indirect estimate
-    /// weighted `weight` (0: not read; final gathering ignores it).
+    /// weighted `weight` (0: not read; final gathering ignores it). `later`: the camera sample
+    /// and the path's throughput to this point, for light samples whose shadow rays are put off
+    /// into `scratch.shadows` (left out of the result); `None`: cast at once.
     #[allow(clippy::too_many_arguments)]
     fn shade(
         &self,
@@ -304,6 +323,7 @@ impl<A: Accel> Shading<'_, '_, A> {
         wo: Vec3,
         m: &Material,
         weight: f32,
+        later: Option<(u32, Vec3)>,
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         c: &mut Counters,
@@ -311,7 +331,11 @@ impl<A: Accel> Shading<'_, '_, A> {
         let only = self.cfg.component;
         let mut l = Vec3::ZERO;
         if only.shows(Component::Direct) {
-            l += direct_light(self.frame, hit, wo, m, self.cfg.light_samples, rng, c);
+            let mut shadow = match later {
+                Some((sample, weight)) => ShadowRays::Later { shadows: &mut scratch.shadows, sample, weight },
+                None => ShadowRays::Now,
+            };
+            l += direct_light_with(self.frame, hit, wo, m, self.cfg.light_samples, &mut shadow, rng, c);
         }
         if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
             c.queries += self.maps.caustic.len() as u64;

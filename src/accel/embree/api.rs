@@ -63,6 +63,13 @@ impl Query {
         // SAFETY: the caller guarantees scene and mask; `RTCRayHit8` is 32-byte aligned by type.
         unsafe { sys::rtcIntersect8(valid, scene, &mut self.ctx, rh) }
     }
+
+    /// # Safety
+    /// `scene` must be a live, committed scene; `valid` must point to 8 ints aligned to 32 bytes.
+    pub unsafe fn occluded8(&mut self, valid: *const i32, scene: sys::RTCScene, ray: &mut sys::RTCRay8) {
+        // SAFETY: the caller guarantees scene and mask; `RTCRay8` is 32-byte aligned by type.
+        unsafe { sys::rtcOccluded8(valid, scene, &mut self.ctx, ray) }
+    }
 }
 
 /// Per-call query state: Embree 4's ray-query context and argument structs.
@@ -141,5 +148,13 @@ impl Query {
         self.link();
         // SAFETY: the caller guarantees scene and mask; `RTCRayHit8` is 32-byte aligned by type.
         unsafe { sys::rtcIntersect8(valid, scene, rh, &mut self.iargs) }
+    }
+
+    /// # Safety
+    /// `scene` must be a live, committed scene; `valid` must point to 8 ints aligned to 32 bytes.
+    pub unsafe fn occluded8(&mut self, valid: *const i32, scene: sys::RTCScene, ray: &mut sys::RTCRay8) {
+        self.link();
+        // SAFETY: the caller guarantees scene and mask; `RTCRay8` is 32-byte aligned by type.
+        unsafe { sys::rtcOccluded8(valid, scene, ray, &mut self.oargs) }
     }
 }

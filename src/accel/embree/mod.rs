@@ -81,6 +81,10 @@ impl Accel for EmbreeAccel {
     fn intersect_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>]) {
         self.scene.intersect_batch(rays, hits)
     }
+
+    fn occluded_batch(&self, rays: &[Ray], blocked: &mut [bool]) {
+        self.scene.occluded_batch(rays, blocked)
+    }
 }
 
 /// Sets flush-to-zero and denormals-are-zero in the calling thread's MXCSR, as Embree

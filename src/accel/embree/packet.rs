@@ -1,5 +1,6 @@
 //! Packet tracing for batches of coherent rays: closest hits by `rtcIntersect8` on `RTCRayHit8`
-//! (structure-of-arrays, 32-byte aligned) with a valid mask, 8 rays at a time. A batch whose length is not a multiple of 8 leaves the tail lanes of its last packet
+//! and occlusion by `rtcOccluded8` on `RTCRay8` (structure-of-arrays, 32-byte aligned) with a
+//! valid mask, 8 rays at a time. A batch whose length is not a multiple of 8 leaves the tail lanes of its last packet
 //! inactive (mask 0), and lanes whose interval is empty are inactive too.
 //!
 //! Eight lanes rather than sixteen: Embree traces 8-wide natively with AVX/AVX2 and emulates
@@ -75,6 +76,23 @@ impl Scene {
                     u: rh.hit.u[lane],
                     v: rh.hit.v[lane],
                 });
+            }
+        }
+    }
+
+    /// Whether each ray of a batch is blocked in `(t_min, t_max)`, `blocked[i]` for `rays[i]`,
+    /// in packets of [`WIDTH`] (`rtcOccluded8` sets an occluded lane's `tfar` to -inf).
+    pub fn occluded_batch(&self, rays: &[Ray], blocked: &mut [bool]) {
+        assert_eq!(rays.len(), blocked.len(), "one answer per ray");
+        let mut query = Query::new(true);
+        for (rays, blocked) in rays.chunks(WIDTH).zip(blocked.chunks_mut(WIDTH)) {
+            let mut packet = sys::RTCRay8::default();
+            let valid = load(rays, &mut packet);
+            // SAFETY: `self.raw()` is a live committed scene; `valid` and `packet` are 32-byte
+            // aligned (checked above) and every active lane holds a finite interval.
+            unsafe { query.occluded8(valid.0.as_ptr(), self.raw(), &mut packet) };
+            for (lane, b) in blocked.iter_mut().enumerate() {
+                *b = valid.0[lane] != 0 && packet.tfar[lane] == f32::NEG_INFINITY;
             }
         }
     }

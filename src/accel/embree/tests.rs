@@ -135,6 +135,9 @@ fn interval_is_open_at_both_ends() {
         let mut hits = [None; 3];
         accel.intersect_batch(&[ray; 3], &mut hits);
         assert!(hits.iter().all(|h| h.is_some() == expect));
+        let mut blocked = [!expect; 3];
+        accel.occluded_batch(&[ray; 3], &mut blocked);
+        assert_eq!(blocked, [expect; 3], "({t_min}, {t_max})");
     }
     // Empty and NaN intervals miss.
     assert!(!accel.occluded(&Ray::segment(o, d, 1.5, 0.5)));
@@ -148,6 +151,11 @@ fn batches_equal_single_rays_for_any_length() {
     let rays = random_rays(&mesh, 1000, 11);
     for len in [0, 1, 7, 8, 9, 15, 16, 17, 100, 1000] {
         let rays = &rays[..len];
+        let mut blocked = vec![false; len];
+        accel.occluded_batch(rays, &mut blocked);
+        let single: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+        assert_eq!(blocked, single, "len {len}");
+        assert!(len < 100 || (single.contains(&true) && single.contains(&false)));
         let mut hits = vec![None; len];
         accel.intersect_batch(rays, &mut hits);
         for (i, ray) in rays.iter().enumerate() {
@@ -169,6 +177,9 @@ fn empty_mesh_gives_an_empty_scene() {
     let mut hits = [Some(Hit { t: 1.0, prim: 0, u: 0.0, v: 0.0 }); 9];
     accel.intersect_batch(&[ray; 9], &mut hits);
     assert!(hits.iter().all(Option::is_none));
+    let mut blocked = [true; 9];
+    accel.occluded_batch(&[ray; 9], &mut blocked);
+    assert_eq!(blocked, [false; 9]);
 }
 
 #[test]
