@@ -34,7 +34,7 @@ use rand::Rng;
 use rand_pcg::Pcg32;
 
 /// Below this bound on the solid angle of the emitters seen from a Lambertian point
-/// (steradians; [`crate::light::LightSet::emitters_solid_angle_bound`]), the point's direct
+/// (steradians; [`crate::light::LightSet::emitters_subtend_less`]), the point's direct
 /// light is sampled from the lights alone (see the module's documentation).
 pub const MIS_MIN_SOLID_ANGLE: f32 = 0.5;
 
@@ -70,8 +70,9 @@ fn shadow_ray(hit: &SurfaceHit, ls: &LightSample) -> Ray {
     Ray::segment(origin, ls.wi, 0.0, t_max)
 }
 
-/// Whether the segment from the surface at `hit` toward the light sample `ls` is unblocked
-/// (its [`shadow_ray`]).
+/// Whether the segment from the surface at `hit` toward the light sample `ls` is unblocked: from
+/// a robust origin to just short of the sampled point (by its rounding error, then by
+/// [`SHADOW_MARGIN`]).
 #[inline]
 pub fn visible<A: Accel>(s: &Frame<'_, A>, hit: &SurfaceHit, ls: &LightSample, c: &mut Counters) -> bool {
     c.rays.shadow += 1;
