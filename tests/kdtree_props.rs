@@ -314,3 +314,21 @@ fn million_points_mostly_duplicates() {
     got.sort_by(f32::total_cmp);
     assert_eq!(got, scan_knn(&pts, q, 50, f32::INFINITY, euclid));
 }
+
+/// A guess holding many times `k` items (the search cuts what it found to the `k` nearest every
+/// `4k`, narrowing as it goes) finds what the linear scan finds.
+#[test]
+fn a_guess_far_too_wide_still_finds_the_nearest() {
+    let pts: Vec<Vec3> = (0..6000)
+        .map(|i| Vec3::new((i % 20) as f32, ((i / 20) % 20) as f32, (i / 400) as f32 * 0.7))
+        .collect();
+    let tree = KdTree::build(pts.clone());
+    let mut out = Vec::new();
+    for (k, p) in [(1, Vec3::splat(3.3)), (10, Vec3::new(10.2, 9.7, 4.1)), (64, Vec3::new(-2.0, 5.0, 1.0))] {
+        tree.knn_with_guess(p, k, 1e3, 1e5, euclid, &mut out);
+        assert!(
+            check_knn(&tree, &out, &scan_knn(&pts, p, k, 1e3, euclid), p, euclid).is_ok(),
+            "k {k} at {p}"
+        );
+    }
+}

@@ -92,10 +92,10 @@ fn heap_insert(heap: &mut Vec<Neighbor>, k: usize, index: usize, d2: f32, limit:
 impl<T: KdPoint> KdTree<T> {
     /// The (up to) `k` items nearest to `p` with distance at most `max_radius`.
     ///
-    /// `out` is cleared and receives the result as a binary max-heap on [`Neighbor::dist2`]:
-    /// the order is unspecified except that `out[0]` is the farthest result (the radius of the
-    /// gathered disc, as the density estimate needs). Ties at the k-th distance are broken
-    /// arbitrarily. Nothing is allocated once `out` has capacity `k`.
+    /// `out` is cleared and receives the result in an unspecified order except that `out[0]` is
+    /// the farthest (the radius of the gathered disc, as the density estimate needs). Ties at
+    /// the k-th distance are broken arbitrarily. Nothing is allocated once `out` has capacity
+    /// `4k` (found items are cut to the `k` nearest by selection each time `4k` are held).
     #[inline]
     pub fn knn(&self, p: Vec3, k: usize, max_radius: f32, out: &mut Vec<Neighbor>) {
         self.knn_with(p, k, max_radius, |d: Vec3| d.length_squared(), out)
@@ -121,7 +121,7 @@ impl<T: KdPoint> KdTree<T> {
             return;
         }
         let limit = inclusive_limit(max_radius * max_radius);
-        self.descend(p, limit, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+        self.nearest_by_selection(p, k, limit, dist2, out);
     }
 
     /// [`KdTree::knn_with`], searching first within the squared metric `guess` only (when it
@@ -130,7 +130,7 @@ impl<T: KdPoint> KdTree<T> {
     /// good guess (the radius of a nearby query's result, with a margin) skips the first,
     /// wide part of a k-NN search, where the heap holds items that later ones evict. The items
     /// found are the same as [`KdTree::knn_with`]'s (ties at the `k`-th distance aside), in
-    /// another order.
+    /// another order but for the farthest, first in both.
     #[inline]
     pub fn knn_with_guess<F: Fn(Vec3) -> f32 + Copy>(
         &self,
@@ -147,13 +147,48 @@ impl<T: KdPoint> KdTree<T> {
         }
         let full = inclusive_limit(max_radius * max_radius);
         if guess > 0.0 && guess < full {
-            self.descend(p, guess, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+            // The k nearest within the guess: if there are k, they are the k nearest.
+            self.nearest_by_selection(p, k, guess, dist2, out);
             if out.len() == k {
                 return;
             }
             out.clear();
         }
-        self.descend(p, full, dist2, |index, d2, limit| heap_insert(out, k, index, d2, limit));
+        self.nearest_by_selection(p, k, full, dist2, out);
+    }
+
+    /// The (up to) `k` items whose metric is below `limit`, nearest first, into `out` (cleared),
+    /// the farthest of them at `out[0]`, the rest in no order. Items found go into `out` as they
+    /// come; every time it holds `4k`, it is cut by selection to its `k` nearest and the search
+    /// narrowed to the `k`-th (a max-heap updated at every item, the textbook way, spent most
+    /// of a gather's time on its unpredictable branches).
+    #[inline]
+    fn nearest_by_selection<F: Fn(Vec3) -> f32>(
+        &self,
+        p: Vec3,
+        k: usize,
+        limit: f32,
+        dist2: F,
+        out: &mut Vec<Neighbor>,
+    ) {
+        out.clear();
+        let by_distance = |a: &Neighbor, b: &Neighbor| a.dist2.total_cmp(&b.dist2);
+        self.descend(p, limit, dist2, |index, d2, limit| {
+            out.push(Neighbor { index: index as u32, dist2: d2 });
+            if out.len() == 4 * k {
+                out.select_nth_unstable_by(k - 1, by_distance);
+                out.truncate(k);
+                *limit = out[k - 1].dist2;
+            }
+        });
+        if out.len() > k {
+            out.select_nth_unstable_by(k - 1, by_distance);
+            out.truncate(k);
+        }
+        let farthest = (0..out.len()).max_by(|&a, &b| by_distance(&out[a], &out[b]));
+        if let Some(f) = farthest {
+            out.swap(0, f);
+        }
     }
 
     /// The nearest item that `accept` takes among the `k` items nearest to `p` within
