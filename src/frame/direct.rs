@@ -207,7 +207,7 @@ pub fn direct_light_with<A: Accel>(
         return Vec3::ZERO;
     }
     let hittable = s.lights.has_hittable();
-    let mis = hittable && takes_bsdf_samples(s, hit, m);
+    let mis = takes_bsdf_samples(s, hit, m);
     let mut sum = Vec3::ZERO;
     for _ in 0..n {
         sum += light_sample_with(s, hit, wo, m, mis, 1.0 / n as f32, shadow, rng, c);
