@@ -197,6 +197,7 @@ impl<'a> BatchReport<'a> {
                     st.name.starts_with("photons.")
                         || st.name.starts_with("kdtree.")
                         || st.name == "irradiance"
+                        || st.name.starts_with("irradiance.")
                 })
                 .map(|st| st.seconds)
                 .sum::<f64>()

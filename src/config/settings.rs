@@ -134,8 +134,9 @@ settings! {
     kernel: Kernel,
     /// Shadow-ray samples per shading point [default: 1].
     light_samples: u32,
-    /// Precompute irradiance at photon positions and read it at diffuse surfaces instead of
-    /// gathering photons there (Christensen 1999) [default: true].
+    /// Precompute irradiance at photon positions (and caustic irradiance where caustic paths
+    /// land) and read it at diffuse surfaces instead of gathering photons there (Christensen
+    /// 1999) [default: true].
     irradiance_cache: bool,
     /// Render only one term of the sum: emitted, direct, caustic or indirect [default: all].
     component: Component,

@@ -68,6 +68,8 @@ pub struct PhotonMapper<'f, 'a, A: Accel> {
 struct PassMaps {
     maps: PhotonMaps,
     irradiance: PrecomputedIrradiance,
+    /// Caustic irradiance at every caustic photon (empty when not precomputed).
+    caustic: PrecomputedIrradiance,
 }
 
 /// Each pass's maps, kept (when asked) for the images of a batch after the first: the maps
@@ -114,8 +116,9 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             return kept;
         }
         let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass, stats, progress);
-        let irradiance = self.precompute(stats, &maps, sites, pass.seed, progress);
-        let made = Rc::new(PassMaps { maps, irradiance });
+        let irradiance = self.precompute(stats, &maps, sites.indirect, pass.seed, progress);
+        let caustic = self.precompute_caustic(stats, &maps, sites.caustic, progress);
+        let made = Rc::new(PassMaps { maps, irradiance, caustic });
         self.cache.put(pass.index, &made);
         made
     }
@@ -135,7 +138,47 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
                 .then_some("the render does not show indirect light (--component)"),
             caustic_unused: (!caustics_shown).then_some("the render does not show caustics (--component)"),
             site_stride: cfg.irradiance_cache.then_some(IRRADIANCE_STRIDE),
+            // Camera hits read caustics at every sample (final-gather hits read the indirect
+            // sites' caustic part).
+            caustic_sites: cfg.irradiance_cache && cfg.component.shows(Component::Caustic),
         }
+    }
+
+    /// Caustic irradiance precomputed at `sites` (stage `irradiance.caustic`), for camera hits
+    /// on Lambertian surfaces: one search for the nearest site instead of a gather of `k`
+    /// photons at every camera sample. The sites are where caustic paths of their own land
+    /// ([`super::maps::CAUSTIC_SITE_SHARE`]), so they are as dense as the caustic is bright
+    /// and the value read lies within about a photon's spacing of the point, a small fraction
+    /// of the gather's radius.
+    fn precompute_caustic(
+        &self,
+        stats: &mut Stats,
+        maps: &PhotonMaps,
+        sites: Vec<SitePoint>,
+        progress: &dyn Progress,
+    ) -> PrecomputedIrradiance {
+        if sites.is_empty() {
+            if !maps.caustic.is_empty() {
+                let why = match self.cfg.irradiance_cache {
+                    true => "no caustic site path landed on a surface",
+                    false => "disabled (--irradiance-cache false)",
+                };
+                stats.skip("irradiance.caustic", why);
+            }
+            return PrecomputedIrradiance::default();
+        }
+        let reason = format!("{} sites where caustic paths land", sites.len());
+        let g = &self.gathers;
+        progress.start("caustic irradiance", sites.len() as u64);
+        let done = |n: u64| progress.advance(n);
+        let caustic = stats.run("irradiance.caustic", reason, |_| {
+            PrecomputedIrradiance::build_caustic(sites, &maps.caustic, &g.caustic, done)
+        });
+        progress.finish();
+        let bytes = caustic.bytes() as u64;
+        let record = MapStats { stored: caustic.len() as u64, bytes, ..Default::default() };
+        stats.photons.insert("caustic_cache".into(), record);
+        caustic
     }
 
     /// Precomputed irradiance at `sites` (empty when there are none).
@@ -215,6 +258,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
             cfg: self.cfg,
             maps: &made.maps,
             irradiance: &made.irradiance,
+            caustic: &made.caustic,
             gathers: self.gathers,
         };
         let camera = &self.frame.camera;
@@ -233,6 +277,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                     let batch = std::mem::take(&mut scratch.batch);
                     if let Some((centre, radius)) = batch.hit_bounds() {
                         scratch.sites.expect(centre, radius);
+                        scratch.caustic_sites.expect(centre, radius);
                     }
                     // Each sample's radiance but for its light samples' shadow rays, which are
                     // put off and cast together as packets (`Shadows`), then added in.
@@ -263,6 +308,7 @@ struct Scratch {
     batch: CameraBatch,
     neighbors: Vec<Neighbor>,
     sites: LookupScratch,
+    caustic_sites: LookupScratch,
     /// The pixel's shadow rays put off, and its samples' radiance.
     shadows: Shadows,
     totals: Vec<Vec3>,
@@ -275,6 +321,8 @@ struct Shading<'s, 'a, A: Accel> {
     maps: &'s PhotonMaps,
     /// Precomputed irradiance (empty when disabled or when there is no indirect map).
     irradiance: &'s PrecomputedIrradiance,
+    /// Precomputed caustic irradiance (empty when disabled or when there is no caustic map).
+    caustic: &'s PrecomputedIrradiance,
     gathers: GatherPair,
 }
 
@@ -338,10 +386,15 @@ impl<A: Accel> Shading<'_, '_, A> {
             l += direct_light_with(self.frame, hit, wo, m, self.cfg.light_samples, &mut shadow, rng, c);
         }
         if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
-            c.queries += self.maps.caustic.len() as u64;
-            let (maps, g) = (&self.maps.caustic, &self.gathers.caustic);
-            let nb = &mut scratch.neighbors;
-            l += c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.normals(), wo, m, g, nb));
+            l += match self.precomputed_caustic(hit, wo, m, scratch, c) {
+                Some(e) => e,
+                None => {
+                    c.queries += self.maps.caustic.len() as u64;
+                    let (maps, g) = (&self.maps.caustic, &self.gathers.caustic);
+                    let nb = &mut scratch.neighbors;
+                    c.timed(Part::Gathers, || PhotonMaps::radiance(maps, hit.p, hit.normals(), wo, m, g, nb))
+                }
+            };
         }
         if !self.maps.indirect.is_empty() && only.shows(Component::Indirect) {
             match self.cfg.indirect {
@@ -393,6 +446,29 @@ impl<A: Accel> Shading<'_, '_, A> {
         let (f, ns) = self.site_query(hit, wo, m, c)?;
         let e = c.timed(Part::Gathers, || self.irradiance.lookup(hit.p, ns, &mut scratch.sites))?;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
+    }
+
+    /// Reflected caustic radiance at a Lambertian surface from the caustic sites, or `None`
+    /// (not Lambertian, nothing precomputed, or no site near enough facing the same way: the
+    /// caller gathers).
+    #[inline]
+    fn precomputed_caustic(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Option<Vec3> {
+        let kd = m.lambertian()?;
+        if self.caustic.is_empty() {
+            return None;
+        }
+        c.queries += 1;
+        let ns = face_forward(hit.n, wo);
+        let sites = &mut scratch.caustic_sites;
+        let e = c.timed(Part::Gathers, || self.caustic.lookup_caustic(hit.p, ns, sites))?;
+        Some(e * kd * std::f32::consts::FRAC_1_PI)
     }
 
     /// Reflected indirect radiance at a Lambertian surface from the precomputed irradiance

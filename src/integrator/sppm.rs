@@ -149,8 +149,13 @@ pub(super) fn pass_maps<A: Accel>(
     stats: &mut Stats,
     progress: &dyn Progress,
 ) -> PhotonMaps {
-    let stages =
-        MapStages { passes: &cfg.maps, indirect_unused: None, caustic_unused: None, site_stride: None };
+    let stages = MapStages {
+        passes: &cfg.maps,
+        indirect_unused: None,
+        caustic_unused: None,
+        site_stride: None,
+        caustic_sites: false,
+    };
     let (maps, _) = stages.trace(frame, analysis, pass, stats, progress);
     stats.skip("irradiance", "progressive photon mapping gathers at visible points");
     maps

@@ -285,6 +285,18 @@ impl PrecomputedIrradiance {
         PrecomputedIrradiance { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
     }
 
+    /// Caustic irradiance at `sites` (points independent of the photons of `caustic`: an
+    /// estimate at one of its own photons would count that photon), read with
+    /// [`PrecomputedIrradiance::lookup_caustic`] within `gather`'s largest radius.
+    pub fn build_caustic(
+        sites: Vec<SitePoint>,
+        caustic: &[PhotonMap],
+        gather: &GatherParams,
+        done: impl Fn(u64) + Sync,
+    ) -> Self {
+        Self::build(sites, &[], caustic, gather, gather, |_, _| Vec3::ZERO, done)
+    }
+
     pub fn len(&self) -> usize {
         self.tree.len()
     }
@@ -329,11 +341,31 @@ impl PrecomputedIrradiance {
         Some(pack::rgb9e5_decode(if front { s.indirect } else { s.indirect_back }) * self.scale)
     }
 
+    /// Caustic irradiance at `x` on the side of unit normal `ns`, from the nearest site whose
+    /// normal agrees (within 25 degrees) among the nearest eight, or `None` (no site near
+    /// enough, or none facing the same way: the far side of a lit wall, a corner), where the
+    /// caller gathers: where the sites are sparse the map's photons are too, and such gathers
+    /// are few and cheap. Read as the indirect sites are ([`LookupScratch::expect`]).
+    #[inline]
+    pub fn lookup_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
+        let i = self.site(x, |n: Vec3| n.dot(ns) >= NORMAL_COS, scratch)?;
+        Some(pack::rgb9e5_decode(self.tree.get(i).caustic) * self.scale)
+    }
+
     /// The site [`PrecomputedIrradiance::lookup_indirect`] reads.
     #[inline]
     fn indirect_site(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<u32> {
-        let parallel = |n: Vec3| n.dot(ns).abs() >= NORMAL_COS;
-        let index = match scratch.near.answer(x, CANDIDATES, self.max_radius, parallel) {
+        self.site(x, |n: Vec3| n.dot(ns).abs() >= NORMAL_COS, scratch)
+    }
+
+    /// The nearest site whose (decoded) normal `accept` takes among the [`CANDIDATES`] nearest
+    /// to `x` within the largest radius, from the neighbourhood held in `scratch` when it
+    /// decides, else by a search (which then gathers the neighbourhood of the region
+    /// expected).
+    #[inline]
+    fn site(&self, x: Vec3, accept: impl Fn(Vec3) -> bool, scratch: &mut LookupScratch) -> Option<u32> {
+        let parallel = accept;
+        let index = match scratch.near.answer(x, CANDIDATES, self.max_radius, &parallel) {
             Known::Answer(index) => index,
             Known::Unknown => {
                 let accept = |s: &Site| parallel(pack::decode_dir_oct(s.normal));
@@ -431,6 +463,47 @@ mod tests {
         assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");
         // Seen from below the floor nothing matches.
         assert!(cache.lookup(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y, &mut scratch).is_none());
+    }
+
+    /// Caustic sites: a lit floor reads its nearest site's value, the floor seen from below
+    /// or a point farther than the largest radius from every site reads `None` (the caller
+    /// gathers); with a neighbourhood held or not, the same answers.
+    #[test]
+    fn caustic_sites_answer_on_the_lit_side_only() {
+        // A lit square of floor, 1e-4 W a photon at 1e4 photons per m^2: E = 1 W/m^2.
+        let hits: Vec<PhotonHit> = (0..100)
+            .flat_map(|i| {
+                (0..100).map(move |j| PhotonHit {
+                    pos: Vec3::new(i as f32 / 100.0, 0.0, j as f32 / 100.0),
+                    err: Vec3::ZERO,
+                    n: Vec3::Y,
+                    wi: Vec3::Y,
+                    power: Vec3::splat(1e-4),
+                })
+            })
+            .collect();
+        // Sites between the photons (independent of them, as the renderer's are).
+        let between = |h: &PhotonHit| PhotonHit { pos: h.pos + Vec3::new(0.005, 0.0, 0.005), ..*h };
+        let sites = pick_sites(&[Hits::from(hits.iter().map(between).collect::<Vec<_>>())], 1);
+        let map = PhotonMap::build(hits, MapColor::Rgb, 10_000);
+        let params = GatherParams { k: 30, max_radius: 0.1, kernel: Kernel::Cone, flatten: 8.0 };
+        let cache = PrecomputedIrradiance::build_caustic(sites, std::slice::from_ref(&map), &params, |_| {});
+        assert_eq!(cache.len(), 10_000);
+        for held in [false, true] {
+            let mut scratch = LookupScratch::default();
+            let mut at = |x: Vec3, ns: Vec3| {
+                if held {
+                    scratch.expect(x, 0.01);
+                }
+                cache.lookup_caustic(x, ns, &mut scratch)
+            };
+            let e = at(Vec3::new(0.503, 0.0, 0.497), Vec3::Y).expect("a site");
+            assert!((e.x - 1.0).abs() < 0.15, "{e}");
+            assert_eq!(at(Vec3::new(0.503, 0.0, 0.497), -Vec3::Y), None);
+            assert_eq!(at(Vec3::new(1.5, 0.0, 0.5), Vec3::Y), None);
+            // Just within the largest radius of the edge's sites: a site answers.
+            assert!(at(Vec3::new(1.05, 0.0, 0.5), Vec3::Y).is_some());
+        }
     }
 
     /// Lookups answered from a neighbourhood give what a search from scratch gives, on a corner
