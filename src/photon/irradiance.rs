@@ -506,6 +506,61 @@ mod tests {
         }
     }
 
+    /// On a uniform density (Poisson photons on a plane) the lookups keep the mean of the
+    /// gathers they replace to within 2 %: measured +1.0 % (`cargo test --release --lib
+    /// precomputed_irradiance_keeps -- --nocapture` prints it), the sum of two opposite
+    /// effects of sites at the map's own photons: each site's estimate counts its own photon
+    /// at the kernel's centre (+3 / (k - 1) = +3 %), and a site where photons happen to be
+    /// sparse reads low and is read over a larger cell (so about -2 %; with each site's own
+    /// photon left out, -2.1 % was measured on the Cornell box's indirect term). Sites
+    /// independent of the map remove both (as the caustic sites are), but expose the
+    /// gathers' own shortfall at edges and on curved surfaces: not done yet.
+    #[test]
+    fn precomputed_irradiance_keeps_the_gathers_mean() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let (n, side) = (400_000, 10.0f32);
+        let hits: Vec<PhotonHit> = (0..n)
+            .map(|_| PhotonHit {
+                pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
+                n: Vec3::Y,
+                err: Vec3::ZERO,
+                wi: Vec3::Y,
+                power: Vec3::splat(1.0 / n as f32),
+            })
+            .collect();
+        let sites = pick_sites(&[Hits::from(hits.clone())], 4);
+        let map = PhotonMap::build(hits, MapColor::Rgb, n as u64);
+        let params = GatherParams { k: 100, max_radius: 1.0, kernel: Kernel::Cone, flatten: 4.0 };
+        let no_direct = |_: usize, _: &SitePoint| Vec3::ZERO;
+        let cache = PrecomputedIrradiance::build(
+            sites,
+            std::slice::from_ref(&map),
+            &[],
+            &params,
+            &params,
+            no_direct,
+            |_| {},
+        );
+        let (mut scratch, mut kept) = (Vec::new(), LookupScratch::default());
+        let (mut gathered, mut read) = (0.0f64, 0.0f64);
+        let queries = 20_000;
+        for _ in 0..queries {
+            let x = Vec3::new(1.0 + 8.0 * rng.gen::<f32>(), 0.0, 1.0 + 8.0 * rng.gen::<f32>());
+            gathered += map.irradiance(x, Vec3::Y, &params, &mut scratch).x as f64;
+            read += cache.lookup_indirect(x, Vec3::Y, &mut kept).expect("a site").x as f64;
+        }
+        let expect = queries as f64 / (side * side) as f64;
+        let (g, c) = (gathered / expect - 1.0, read / expect - 1.0);
+        eprintln!(
+            "mean against the exact irradiance: gathers {:+.2} %, lookups {:+.2} %",
+            100.0 * g,
+            100.0 * c
+        );
+        assert!(g.abs() < 0.01, "gathers {g:+.4}");
+        assert!((c - g).abs() < 0.02, "lookups {c:+.4} against gathers {g:+.4}");
+    }
+
     /// Lookups answered from a neighbourhood give what a search from scratch gives, on a corner
     /// of three walls (sites of three orientations, some queries on the far side), for pixels
     /// of any size, with photons far from the origin too.
