@@ -168,17 +168,11 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             return PrecomputedIrradiance::default();
         }
         let reason = format!("{} sites where caustic paths land", sites.len());
-        let g = &self.gathers;
-        progress.start("caustic irradiance", sites.len() as u64);
-        let done = |n: u64| progress.advance(n);
-        let caustic = stats.run("irradiance.caustic", reason, |_| {
-            PrecomputedIrradiance::build_caustic(sites, &maps.caustic, &g.caustic, done)
-        });
-        progress.finish();
-        let bytes = caustic.bytes() as u64;
-        let record = MapStats { stored: caustic.len() as u64, bytes, ..Default::default() };
-        stats.photons.insert("caustic_cache".into(), record);
-        caustic
+        let stage =
+            SiteStage { name: "irradiance.caustic", bar: "caustic irradiance", record: "caustic_cache" };
+        stage.run(stats, progress, sites.len(), reason, |done| {
+            PrecomputedIrradiance::build_caustic(sites, &maps.caustic, &self.gathers.caustic, done)
+        })
     }
 
     /// Precomputed irradiance at `sites` (empty when there are none).
@@ -201,9 +195,8 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         }
         let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
         let g = &self.gathers;
-        progress.start("irradiance", sites.len() as u64);
-        let done = |n: u64| progress.advance(n);
-        let irradiance = stats.run("irradiance", reason, |_| {
+        let stage = SiteStage { name: "irradiance", bar: "irradiance", record: "irradiance_cache" };
+        stage.run(stats, progress, sites.len(), reason, |done| {
             if self.cfg.indirect != IndirectMode::FinalGather {
                 // Only final gathering reads the direct part.
                 // Nor the caustic part: camera hits read the caustic map itself.
@@ -236,12 +229,36 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
                 direct,
                 done,
             )
-        });
+        })
+    }
+}
+
+/// A stage that precomputes irradiance at sites: its name in the stats, its progress bar's,
+/// and the name its sites are recorded under among the maps.
+struct SiteStage {
+    name: &'static str,
+    bar: &'static str,
+    record: &'static str,
+}
+
+impl SiteStage {
+    /// Runs `build` (told of the sites done, for the bar) over `sites` sites and records the
+    /// sites it made.
+    fn run(
+        &self,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+        sites: usize,
+        reason: String,
+        build: impl FnOnce(&(dyn Fn(u64) + Sync)) -> PrecomputedIrradiance,
+    ) -> PrecomputedIrradiance {
+        progress.start(self.bar, sites as u64);
+        let done = |n: u64| progress.advance(n);
+        let made = stats.run(self.name, reason, |_| build(&done));
         progress.finish();
-        let bytes = irradiance.bytes() as u64;
-        let record = MapStats { stored: irradiance.len() as u64, bytes, ..Default::default() };
-        stats.photons.insert("irradiance_cache".into(), record);
-        irradiance
+        let record = MapStats { stored: made.len() as u64, bytes: made.bytes() as u64, ..Default::default() };
+        stats.photons.insert(self.record.into(), record);
+        made
     }
 }
 
