@@ -436,13 +436,19 @@ impl<A: Accel> Shading<'_, '_, A> {
         l
     }
 
-    /// Whether the precomputed irradiance answers at `hit` seen from `wo`: the Lambertian BRDF
+    /// Whether the sites of `cache` answer at `hit` seen from `wo`: the Lambertian BRDF
     /// `kd / π` there and the normal on the viewer's side, counting the lookup to come; `None`
     /// (not Lambertian, or nothing precomputed).
     #[inline]
-    fn site_query(&self, hit: &SurfaceHit, wo: Vec3, m: &Material, c: &mut Counters) -> Option<(Vec3, Vec3)> {
+    fn site_query(
+        cache: &PrecomputedIrradiance,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        c: &mut Counters,
+    ) -> Option<(Vec3, Vec3)> {
         let kd = m.lambertian()?;
-        if self.irradiance.is_empty() {
+        if cache.is_empty() {
             return None;
         }
         c.queries += 1;
@@ -460,7 +466,7 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Irradiance> {
-        let (f, ns) = self.site_query(hit, wo, m, c)?;
+        let (f, ns) = Self::site_query(self.irradiance, hit, wo, m, c)?;
         let e = c.timed(Part::Gathers, || self.irradiance.lookup(hit.p, ns, &mut scratch.sites))?;
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }
@@ -477,15 +483,10 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Vec3> {
-        let kd = m.lambertian()?;
-        if self.caustic.is_empty() {
-            return None;
-        }
-        c.queries += 1;
-        let ns = face_forward(hit.n, wo);
+        let (f, ns) = Self::site_query(self.caustic, hit, wo, m, c)?;
         let sites = &mut scratch.caustic_sites;
         let e = c.timed(Part::Gathers, || self.caustic.lookup_caustic(hit.p, ns, sites))?;
-        Some(e * kd * std::f32::consts::FRAC_1_PI)
+        Some(f * e)
     }
 
     /// Reflected indirect radiance at a Lambertian surface from the precomputed irradiance
@@ -499,7 +500,7 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Vec3> {
-        let (f, ns) = self.site_query(hit, wo, m, c)?;
+        let (f, ns) = Self::site_query(self.irradiance, hit, wo, m, c)?;
         let e = c.timed(Part::Gathers, || self.irradiance.lookup_indirect(hit.p, ns, &mut scratch.sites))?;
         Some(f * e)
     }

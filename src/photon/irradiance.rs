@@ -518,17 +518,9 @@ mod tests {
     #[test]
     fn precomputed_irradiance_keeps_the_gathers_mean() {
         use rand::{Rng, SeedableRng};
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
         let (n, side) = (400_000, 10.0f32);
-        let hits: Vec<PhotonHit> = (0..n)
-            .map(|_| PhotonHit {
-                pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
-                n: Vec3::Y,
-                err: Vec3::ZERO,
-                wi: Vec3::Y,
-                power: Vec3::splat(1.0 / n as f32),
-            })
-            .collect();
+        let hits = crate::photon::map::uniform_floor(n, side, 5);
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(6);
         let sites = pick_sites(&[Hits::from(hits.clone())], 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, n as u64);
         let params = GatherParams { k: 100, max_radius: 1.0, kernel: Kernel::Cone, flatten: 4.0 };

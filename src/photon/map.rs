@@ -456,6 +456,24 @@ pub fn kernel_weight(kernel: Kernel, t2: f32) -> f32 {
     }
 }
 
+/// `n` photons scattered uniformly at random over the square `[0, side]²` of the floor `y = 0`,
+/// arriving straight down with `1 / n` W each (generator seeded `seed`): for tests of the
+/// estimates' means.
+#[cfg(test)]
+pub(crate) fn uniform_floor(n: usize, side: f32, seed: u64) -> Vec<PhotonHit> {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_pcg::Pcg64::seed_from_u64(seed);
+    (0..n)
+        .map(|_| PhotonHit {
+            pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
+            n: Vec3::Y,
+            err: Vec3::ZERO,
+            wi: Vec3::Y,
+            power: Vec3::splat(1.0 / n as f32),
+        })
+        .collect()
+}
+
 /// The maps a render uses. Per-channel mode keeps three maps of each kind, RGB mode one.
 #[derive(Debug, Default)]
 pub struct PhotonMaps {
@@ -546,19 +564,8 @@ mod tests {
     /// kernel (the k-th photon, which fixes the radius, is not counted).
     #[test]
     fn small_k_estimates_are_unbiased() {
-        use rand::{Rng, SeedableRng};
-        let mut rng = rand_pcg::Pcg64::seed_from_u64(11);
-        let n = 200_000;
-        let side = 10.0f32;
-        let hits: Vec<PhotonHit> = (0..n)
-            .map(|_| PhotonHit {
-                pos: Vec3::new(rng.gen::<f32>() * side, 0.0, rng.gen::<f32>() * side),
-                n: Vec3::Y,
-                err: Vec3::ZERO,
-                wi: Vec3::Y,
-                power: Vec3::splat(1.0 / n as f32),
-            })
-            .collect();
+        let (n, side) = (200_000, 10.0f32);
+        let hits = uniform_floor(n, side, 11);
         let map = PhotonMap::build(hits, MapColor::Rgb, n as u64);
         let expect = 1.0 / (side * side);
         let mut scratch = Vec::new();
