@@ -8,6 +8,7 @@
 #   bash scripts/camera-compare.sh OLD_BINARY NEW_BINARY [ROUNDS] [SCENE...] [-- render flags]
 #
 # Defaults: 3 rounds; the Cornell box, the caustics scene, the bunny and the doorway.
+# STAGE=NAME compares that stage instead of `camera` (STAGE=wall: the whole render's wall time).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 old=$1
@@ -37,17 +38,20 @@ for round in $(seq 1 "$rounds"); do
     done
     echo "round $round of $rounds done (load average $(cut -d' ' -f1 /proc/loadavg))" >&2
 done
-printf '%-12s %9s %9s %8s\n' scene "old s" "new s" new/old
+printf '%-12s %9s %9s %8s   (%s)\n' scene "old s" "new s" new/old "${STAGE:-camera}"
 for scene in "${scenes[@]}"; do
     name=$(basename "$scene" .toml)
-    python3 - "$out" "$name" "$rounds" <<'PY'
+    python3 - "$out" "$name" "$rounds" "${STAGE:-camera}" <<'PY'
 import json, statistics, sys
-out, name, rounds = sys.argv[1], sys.argv[2], int(sys.argv[3])
+out, name, rounds, stage = sys.argv[1], sys.argv[2], int(sys.argv[3]), sys.argv[4]
 def camera(which):
     times = []
     for r in range(1, rounds + 1):
         stats = json.load(open(f"{out}/{name}.{which}.{r}.json"))
-        times.append(sum(s["seconds"] for s in stats["stages"] if s["name"] == "camera"))
+        if stage == "wall":
+            times.append(stats["wall_seconds"])
+        else:
+            times.append(sum(s["seconds"] for s in stats["stages"] if s["name"] == stage))
     return statistics.median(times)
 o, n = camera("old"), camera("new")
 print(f"{name:<12} {o:9.3f} {n:9.3f} {n / o:8.3f}")

@@ -71,6 +71,7 @@ pub struct Stats {
     /// photon estimate): `None` with one pass, or with sppm, whose passes are not independent.
     pub error_estimate: Option<crate::film::sums::ErrorEstimate>,
     pub stages: Vec<Stage>,
+    /// Each photon map's record, and the precomputed irradiance's sites' ([`SITE_RECORDS`]).
     pub photons: BTreeMap<String, MapStats>,
     pub rays: RayCounts,
     pub rays_per_second: f64,
@@ -91,39 +92,50 @@ pub struct Stats {
     /// The raw rates weighted by the render's mix of rays (rays/s), 0 when not measured.
     pub raw_rays_per_second: f64,
     /// `rays_per_second / raw_rays_per_second`: the share of the photon and camera stages'
-    /// time that is ray casting (1 would mean nothing else costs anything); 0 when not measured.
+    /// time that is ray casting (1 would mean nothing else costs anything; the precomputed
+    /// irradiance's estimation, which casts no ray, is left out of that time wherever it runs);
+    /// 0 when not measured.
     pub rays_to_raw_ratio: f64,
     /// Where the camera stage's time went.
     pub camera_time: CameraTime,
 }
 
+/// The records of [`Stats::photons`] that hold precomputed-irradiance sites, not photons:
+/// `stored` sites, `seen` of them estimated (those the camera read), no photon emitted.
+pub const SITE_RECORDS: [&str; 2] = ["irradiance_cache", "caustic_cache"];
+
 /// The camera stage's thread time (the per-pixel loops, summed over threads) and its shares:
-/// ray casting, photon gathers and irradiance lookups, and the rest (sampling, shading,
-/// light choice). The shares come from a random one in 16 of the calls timed; they sum to 1.
+/// ray casting, photon gathers and irradiance lookups, estimating the precomputed irradiance
+/// that the lookups read first, and the rest (sampling, shading, light choice). The shares of
+/// rays and gathers come from a random one in 16 of the calls timed, the estimates' is
+/// measured; they sum to 1.
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct CameraTime {
     pub thread_seconds: f64,
     pub rays_share: f64,
     pub gathers_share: f64,
+    pub estimate_share: f64,
     pub rest_share: f64,
 }
 
 impl CameraTime {
-    /// From the nanoseconds measured: all of the per-pixel loops, and the estimated parts in
-    /// ray casting and gathering (clamped so that no share is negative: the parts are
-    /// estimates, the whole is measured).
-    pub fn new(pixels_ns: u64, rays_ns: u64, gathers_ns: u64) -> Self {
+    /// From the nanoseconds measured: all of the per-pixel loops, the parts in ray casting and
+    /// gathering (estimated) and in estimating precomputed irradiance (measured), clamped so
+    /// that no share is negative: the sampled parts are estimates, the whole is measured.
+    pub fn new(pixels_ns: u64, rays_ns: u64, gathers_ns: u64, estimate_ns: u64) -> Self {
         if pixels_ns == 0 {
             return CameraTime::default();
         }
         let whole = pixels_ns as f64;
-        let rays = (rays_ns as f64 / whole).min(1.0);
-        let gathers = (gathers_ns as f64 / whole).min(1.0 - rays);
+        let estimate = (estimate_ns as f64 / whole).min(1.0);
+        let rays = (rays_ns as f64 / whole).min(1.0 - estimate);
+        let gathers = (gathers_ns as f64 / whole).min(1.0 - estimate - rays);
         CameraTime {
             thread_seconds: whole * 1e-9,
             rays_share: rays,
             gathers_share: gathers,
-            rest_share: 1.0 - rays - gathers,
+            estimate_share: estimate,
+            rest_share: 1.0 - rays - gathers - estimate,
         }
     }
 }

@@ -289,7 +289,8 @@ fn on_a_terminal(dir: &Path, args: &[&str]) -> Option<String> {
     Some(text(&out.stdout))
 }
 
-/// Every stage longer than a moment has a bar: the precomputed irradiance; a progressive
+/// Every stage longer than a moment has a bar: the photons, the camera (the precomputed
+/// irradiance, estimated as the camera reads it, has none of its own); a progressive
 /// render's bar counts passes and photons; `converge` has one bar over all its renders.
 #[test]
 fn long_stages_show_bars_with_counts() {
@@ -302,7 +303,9 @@ fn long_stages_show_bars_with_counts() {
         eprintln!("no `script` here: the bars cannot be seen");
         return;
     };
-    assert!(plain.contains("irradiance ["), "no irradiance bar: {plain:?}");
+    for bar in ["indirect photons [", "camera ["] {
+        assert!(plain.contains(bar), "no bar {bar:?}: {plain:?}");
+    }
     let sppm =
         [&["render", cornell, "-o", "b.exr", "--integrator", "sppm", "--passes", "3"][..], &small].concat();
     let sppm = on_a_terminal(dir.path(), &sppm).unwrap();

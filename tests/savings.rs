@@ -278,6 +278,23 @@ fn the_indirect_estimate_at_a_quarter_of_the_samples_keeps_its_mean() {
     assert!(every > 0.0 && ((quarter - every) / every).abs() < 0.01, "{quarter} vs {every}");
 }
 
+/// Precomputed irradiance is estimated where the camera reads it: in the doorway scene the
+/// camera looks through the door into the lit room and reads a fraction of the sites (on the
+/// default render, 21 % of them, a block of 32 at a time); the stats say how many
+/// (`irradiance_cache.seen` of `stored`) and what share of the camera stage it took.
+#[test]
+fn precomputed_irradiance_is_estimated_where_the_camera_reads_it() {
+    let out = render_checked(&scene("doorway"), &quick(), 32);
+    let st = stage(&out, "irradiance");
+    assert!(st.ran && st.reason.contains("estimated as read"), "{st:?}");
+    let sites = &out.stats.photons["irradiance_cache"];
+    assert!(sites.stored > 1000, "{sites:?}");
+    assert!(sites.seen > 0 && sites.seen * 2 < sites.stored, "{sites:?}");
+    assert!((sites.efficiency - sites.seen as f64 / sites.stored as f64).abs() < 1e-12);
+    let share = out.stats.camera_time.estimate_share;
+    assert!(share > 0.0 && share < 1.0, "{share}");
+}
+
 /// The caustic term read from precomputed caustic irradiance (the default) has the mean of the
 /// caustic map's gathers at every sample (`--irradiance-cache false`), from the same map: the
 /// sites are points of their own, not the map's photons (at the photons, counting each site's

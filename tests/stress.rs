@@ -117,7 +117,9 @@ fn every_case_is_tested() {
 fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
     use photonmap::config::Kernel;
     use photonmap::geometry::Vec3;
-    use photonmap::photon::irradiance::{pick_sites, LookupScratch, PrecomputedIrradiance};
+    use photonmap::photon::irradiance::{
+        pick_sites, LookupScratch, PrecomputedIrradiance, SitePoint, SiteSource,
+    };
     use photonmap::photon::map::{GatherParams, Hits, MapColor, PhotonHit, PhotonMap};
     let estimate = |k: f32| {
         let n = 100;
@@ -133,15 +135,16 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
         let sites = pick_sites(&[Hits::from(hits.clone())], 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, (n * n) as u64);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
-        let cache = PrecomputedIrradiance::build(
-            sites,
-            std::slice::from_ref(&map),
-            &[],
-            &params,
-            &params,
-            |_, _| Vec3::splat(k),
-            |_| {},
-        );
+        let cache = PrecomputedIrradiance::new(sites, params.max_radius, true);
+        let direct = |_: usize, _: &SitePoint| Vec3::splat(k);
+        let source = SiteSource {
+            indirect: std::slice::from_ref(&map),
+            caustic: &[],
+            gather: &params,
+            caustic_gather: &params,
+            direct: Some(&direct),
+        };
+        let cache = cache.sites(source);
         let x = Vec3::new(0.5, 0.0, 0.5);
         let mut scratch = Vec::new();
         let e = map.irradiance(x, Vec3::Y, &params, &mut scratch);

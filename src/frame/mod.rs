@@ -90,6 +90,9 @@ pub struct Clock {
     pub pixels_ns: u64,
     pub rays_ns: u64,
     pub gathers_ns: u64,
+    /// Of `pixels_ns`, the time estimating precomputed irradiance as lookups first read it
+    /// (measured, not sampled: set by the integrator after its camera pass).
+    pub estimate_ns: u64,
 }
 
 impl std::ops::AddAssign for Clock {
@@ -97,6 +100,7 @@ impl std::ops::AddAssign for Clock {
         self.pixels_ns += o.pixels_ns;
         self.rays_ns += o.rays_ns;
         self.gathers_ns += o.gathers_ns;
+        self.estimate_ns += o.estimate_ns;
     }
 }
 

@@ -95,10 +95,13 @@ fn finish_stats(stats: &mut Stats, counters: &Counters, cfg: &RenderConfig) {
     }
     stats.nonfinite_samples = counters.nonfinite;
     let clock = &counters.clock;
-    stats.camera_time = crate::stats::CameraTime::new(clock.pixels_ns, clock.rays_ns, clock.gathers_ns);
+    stats.camera_time =
+        crate::stats::CameraTime::new(clock.pixels_ns, clock.rays_ns, clock.gathers_ns, clock.estimate_ns);
     stats.width = cfg.width;
     stats.height = cfg.height;
-    let traced_seconds: f64 = camera_seconds + photon_seconds;
+    // The camera stage's time estimating precomputed irradiance is the irradiance stage's work,
+    // done where it is needed: it casts no ray, and is left out as that stage is.
+    let traced_seconds: f64 = camera_seconds * (1.0 - stats.camera_time.estimate_share) + photon_seconds;
     if traced_seconds > 0.0 {
         stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
     }

@@ -9,7 +9,7 @@ use crate::film::Film;
 use crate::frame::camera::PixelSamples;
 use crate::frame::{Counters, Progress, Quiet};
 use crate::sampling::derive_seed;
-use crate::stats::Stats;
+use crate::stats::{Stats, SITE_RECORDS};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -221,8 +221,12 @@ impl Batches {
 /// What a progressive render's bar says after `passes` passes: the passes and the photons
 /// traced over them (`12 passes, 1.2M photons`).
 fn pass_message(passes: u32, stats: &Stats) -> String {
-    let photons: u64 =
-        stats.photons.iter().filter(|(name, _)| *name != "irradiance_cache").map(|(_, m)| m.emitted).sum();
+    let photons: u64 = stats
+        .photons
+        .iter()
+        .filter(|(name, _)| !SITE_RECORDS.contains(&name.as_str()))
+        .map(|(_, m)| m.emitted)
+        .sum();
     let count = |n: u64| match n {
         0..=9_999 => n.to_string(),
         10_000..=999_999 => format!("{:.0}k", n as f64 / 1e3),

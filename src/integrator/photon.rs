@@ -1,6 +1,7 @@
 //! Two-pass photon mapping (Jensen 1996, 2001), the renderer proper. Each pass traces the
-//! photon maps ([`super::maps`]), precomputes irradiance at a subset of the indirect photons
-//! (Christensen 1999), then renders every pixel: primary rays through mirrors and glass, and at
+//! photon maps ([`super::maps`]), picks the sites of precomputed irradiance among the indirect
+//! photons (Christensen 1999; their values are estimated as the camera first reads them), then
+//! renders every pixel: primary rays through mirrors and glass, and at
 //! the first diffuse or glossy surface the sum the lecture prescribes: direct light by shadow
 //! rays, caustics from the caustic map, indirect light from the indirect map (radiance
 //! estimate) or by final gathering.
@@ -15,11 +16,13 @@ use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material, TransportMode};
-use crate::photon::irradiance::{Irradiance, LookupScratch, PrecomputedIrradiance, SitePoint};
+use crate::photon::irradiance::{
+    Irradiance, LookupScratch, PrecomputedIrradiance, SiteDirect, SitePoint, SiteSource, Sites,
+};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use crate::sampling::derive_seed;
-use crate::stats::{MapStats, Stats};
+use crate::stats::{MapStats, Stats, SITE_RECORDS};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
@@ -68,8 +71,11 @@ pub struct PhotonMapper<'f, 'a, A: Accel> {
 struct PassMaps {
     maps: PhotonMaps,
     irradiance: PrecomputedIrradiance,
-    /// Caustic irradiance at every caustic photon (empty when not precomputed).
+    /// Caustic irradiance where caustic site paths land (empty when not precomputed).
     caustic: PrecomputedIrradiance,
+    /// The seed of the pass that traced them (the direct light at final-gather sites draws
+    /// its samples from it, whichever image of a batch first reads a site).
+    seed: u64,
 }
 
 /// Each pass's maps, kept (when asked) for the images of a batch after the first: the maps
@@ -116,9 +122,9 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             return kept;
         }
         let (maps, sites) = self.stages().trace(self.frame, self.analysis, pass, stats, progress);
-        let irradiance = self.precompute(stats, &maps, sites.indirect, pass.seed, progress);
-        let caustic = self.precompute_caustic(stats, &maps, sites.caustic, progress);
-        let made = Rc::new(PassMaps { maps, irradiance, caustic });
+        let irradiance = self.precompute(stats, sites.indirect);
+        let caustic = self.precompute_caustic(stats, &maps, sites.caustic);
+        let made = Rc::new(PassMaps { maps, irradiance, caustic, seed: pass.seed });
         self.cache.put(pass.index, &made);
         made
     }
@@ -149,13 +155,13 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
     /// photons at every camera sample. The sites are where caustic paths of their own land
     /// ([`super::maps::CAUSTIC_SITE_SHARE`]), so they are as dense as the caustic is bright
     /// and the value read lies within about a photon's spacing of the point, a small fraction
-    /// of the gather's radius.
+    /// of the gather's radius. The stage indexes them; their values are estimated as the
+    /// camera first reads them.
     fn precompute_caustic(
         &self,
         stats: &mut Stats,
         maps: &PhotonMaps,
         sites: Vec<SitePoint>,
-        progress: &dyn Progress,
     ) -> PrecomputedIrradiance {
         if sites.is_empty() {
             if !maps.caustic.is_empty() {
@@ -167,23 +173,16 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             }
             return PrecomputedIrradiance::default();
         }
-        let reason = format!("{} sites where caustic paths land", sites.len());
-        let stage =
-            SiteStage { name: "irradiance.caustic", bar: "caustic irradiance", record: "caustic_cache" };
-        stage.run(stats, progress, sites.len(), reason, |done| {
-            PrecomputedIrradiance::build_caustic(sites, &maps.caustic, &self.gathers.caustic, done)
+        let reason = format!("{} sites where caustic paths land, estimated as read", sites.len());
+        let radius = self.gathers.caustic.max_radius;
+        index_sites(stats, "irradiance.caustic", SITE_RECORDS[1], reason, || {
+            PrecomputedIrradiance::new(sites, radius, false)
         })
     }
 
-    /// Precomputed irradiance at `sites` (empty when there are none).
-    fn precompute(
-        &self,
-        stats: &mut Stats,
-        maps: &PhotonMaps,
-        sites: Vec<SitePoint>,
-        seed: u64,
-        progress: &dyn Progress,
-    ) -> PrecomputedIrradiance {
+    /// Precomputed irradiance at `sites` (empty when there are none), indexed (stage
+    /// `irradiance`); the values are estimated as the camera first reads them.
+    fn precompute(&self, stats: &mut Stats, sites: Vec<SitePoint>) -> PrecomputedIrradiance {
         if sites.is_empty() {
             let why = if self.cfg.irradiance_cache {
                 "no indirect photons"
@@ -193,73 +192,43 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
             stats.skip("irradiance", why);
             return PrecomputedIrradiance::default();
         }
-        let reason = format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths", sites.len());
-        let g = &self.gathers;
-        let stage = SiteStage { name: "irradiance", bar: "irradiance", record: "irradiance_cache" };
-        stage.run(stats, progress, sites.len(), reason, |done| {
-            if self.cfg.indirect != IndirectMode::FinalGather {
-                // Only final gathering reads the direct part.
-                // Nor the caustic part: camera hits read the caustic map itself.
-                return PrecomputedIrradiance::build(
-                    sites,
-                    &maps.indirect,
-                    &[],
-                    &g.indirect,
-                    &g.caustic,
-                    |_, _| Vec3::ZERO,
-                    done,
-                );
-            }
-            // Direct irradiance at each site: the shading of a white Lambertian surface (MIS of
-            // light and cosine sampling), times pi.
-            let white = Material::Diffuse { kd: Vec3::ONE };
-            let direct = |i: usize, site: &SitePoint| {
-                let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0xD12EC7, i as u64));
-                let mut c = Counters::default();
-                let hit = SurfaceHit::flat(site.pos, site.err, site.n);
-                let l = direct_light(self.frame, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
-                std::f32::consts::PI * l
-            };
-            PrecomputedIrradiance::build(
-                sites,
-                &maps.indirect,
-                &maps.caustic,
-                &g.indirect,
-                &g.caustic,
-                direct,
-                done,
-            )
+        let reason =
+            format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths, estimated as read", sites.len());
+        let radius = self.gathers.indirect.max_radius;
+        // Final gathering reads the direct light at the sites, whose shadow rays leave from them.
+        let keep_errors = self.cfg.indirect == IndirectMode::FinalGather;
+        index_sites(stats, "irradiance", SITE_RECORDS[0], reason, || {
+            PrecomputedIrradiance::new(sites, radius, keep_errors)
         })
     }
 }
 
-/// A stage that precomputes irradiance at sites: its name in the stats, its progress bar's,
-/// and the name its sites are recorded under among the maps.
-struct SiteStage {
-    name: &'static str,
-    bar: &'static str,
-    record: &'static str,
+/// Runs the stage `name` that indexes sites (`index`) and records them among the maps as
+/// `record`.
+fn index_sites(
+    stats: &mut Stats,
+    name: &str,
+    record: &str,
+    reason: String,
+    index: impl FnOnce() -> PrecomputedIrradiance,
+) -> PrecomputedIrradiance {
+    let made = stats.run(name, reason, |_| index());
+    let entry = MapStats { stored: made.len() as u64, bytes: made.bytes() as u64, ..Default::default() };
+    stats.photons.insert(record.into(), entry);
+    made
 }
 
-impl SiteStage {
-    /// Runs `build` (told of the sites done, for the bar) over `sites` sites and records the
-    /// sites it made.
-    fn run(
-        &self,
-        stats: &mut Stats,
-        progress: &dyn Progress,
-        sites: usize,
-        reason: String,
-        build: impl FnOnce(&(dyn Fn(u64) + Sync)) -> PrecomputedIrradiance,
-    ) -> PrecomputedIrradiance {
-        progress.start(self.bar, sites as u64);
-        let done = |n: u64| progress.advance(n);
-        let made = stats.run(self.name, reason, |_| build(&done));
-        progress.finish();
-        let record = MapStats { stored: made.len() as u64, bytes: made.bytes() as u64, ..Default::default() };
-        stats.photons.insert(self.record.into(), record);
-        made
+/// After a camera pass: how many of `cache`'s sites have been estimated (as `seen`, of the
+/// `stored` ones) and the memory they hold now, in the record `record`; returns the thread
+/// seconds estimating them took in all.
+fn record_estimated(stats: &mut Stats, record: &str, cache: &PrecomputedIrradiance) -> f64 {
+    let (sites, seconds) = cache.estimated();
+    if let Some(entry) = stats.photons.get_mut(record) {
+        entry.seen = sites;
+        entry.efficiency = if entry.stored > 0 { sites as f64 / entry.stored as f64 } else { 0.0 };
+        entry.bytes = cache.bytes() as u64;
     }
+    seconds
 }
 
 impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
@@ -270,16 +239,44 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
         progress: &dyn Progress,
     ) -> (PassImage, Counters) {
         let made = self.pass_maps(pass, stats, progress);
+        let (frame, g) = (self.frame, &self.gathers);
+        let final_gather = self.cfg.indirect == IndirectMode::FinalGather;
+        // Direct irradiance at a site, which only final gathering reads: the shading of a
+        // white Lambertian surface (MIS of light and cosine sampling), times pi.
+        let white = Material::Diffuse { kd: Vec3::ONE };
+        let seed = made.seed;
+        let direct = |i: usize, site: &SitePoint| {
+            let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0xD12EC7, i as u64));
+            let mut c = Counters::default();
+            let hit = SurfaceHit::flat(site.pos, site.err, site.n);
+            let l = direct_light(frame, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
+            std::f32::consts::PI * l
+        };
         let shading = Shading {
-            frame: self.frame,
+            frame,
             cfg: self.cfg,
             maps: &made.maps,
-            irradiance: &made.irradiance,
-            caustic: &made.caustic,
+            // Camera hits read the caustic map itself, final-gather hits the sites' caustic part.
+            irradiance: made.irradiance.sites(SiteSource {
+                indirect: &made.maps.indirect,
+                caustic: if final_gather { &made.maps.caustic } else { &[] },
+                gather: &g.indirect,
+                caustic_gather: &g.caustic,
+                direct: final_gather.then_some(&direct as &SiteDirect<'_>),
+            }),
+            caustic: made.caustic.sites(SiteSource {
+                indirect: &[],
+                caustic: &made.maps.caustic,
+                gather: &g.caustic,
+                caustic_gather: &g.caustic,
+                direct: None,
+            }),
             gathers: self.gathers,
         };
         let camera = &self.frame.camera;
         let mut pixels = vec![(); camera.width as usize * camera.height as usize];
+        // Sites estimated by earlier images of a batch are not this one's work.
+        let before = made.irradiance.estimated().1 + made.caustic.estimated().1;
         let spp = pass.samples.spp;
         let lookups = indirect_samples(spp) as usize;
         let indirect_weight = spp as f32 / lookups.max(1) as f32;
@@ -315,6 +312,10 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                 },
             )
         });
+        let mut c = c;
+        let after = record_estimated(stats, SITE_RECORDS[0], &made.irradiance)
+            + record_estimated(stats, SITE_RECORDS[1], &made.caustic);
+        c.clock.estimate_ns = ((after - before).max(0.0) * 1e9) as u64;
         (film.into(), c)
     }
 }
@@ -337,9 +338,9 @@ struct Shading<'s, 'a, A: Accel> {
     cfg: &'s PhotonConfig,
     maps: &'s PhotonMaps,
     /// Precomputed irradiance (empty when disabled or when there is no indirect map).
-    irradiance: &'s PrecomputedIrradiance,
+    irradiance: Sites<'s>,
     /// Precomputed caustic irradiance (empty when disabled or when there is no caustic map).
-    caustic: &'s PrecomputedIrradiance,
+    caustic: Sites<'s>,
     gathers: GatherPair,
 }
 
@@ -441,7 +442,7 @@ impl<A: Accel> Shading<'_, '_, A> {
     /// (not Lambertian, or nothing precomputed).
     #[inline]
     fn site_query(
-        cache: &PrecomputedIrradiance,
+        cache: &Sites<'_>,
         hit: &SurfaceHit,
         wo: Vec3,
         m: &Material,
@@ -466,8 +467,9 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Irradiance> {
-        let (f, ns) = Self::site_query(self.irradiance, hit, wo, m, c)?;
-        let e = c.timed(Part::Gathers, || self.irradiance.lookup(hit.p, ns, &mut scratch.sites))?;
+        let (f, ns) = Self::site_query(&self.irradiance, hit, wo, m, c)?;
+        let site = c.timed(Part::Gathers, || self.irradiance.find(hit.p, ns, &mut scratch.sites))?;
+        let e = self.irradiance.irradiance(site);
         Some(Irradiance { direct: f * e.direct, indirect: f * e.indirect, caustic: f * e.caustic })
     }
 
@@ -483,10 +485,10 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Vec3> {
-        let (f, ns) = Self::site_query(self.caustic, hit, wo, m, c)?;
+        let (f, ns) = Self::site_query(&self.caustic, hit, wo, m, c)?;
         let sites = &mut scratch.caustic_sites;
-        let e = c.timed(Part::Gathers, || self.caustic.lookup_caustic(hit.p, ns, sites))?;
-        Some(f * e)
+        let site = c.timed(Part::Gathers, || self.caustic.find_caustic(hit.p, ns, sites))?;
+        Some(f * self.caustic.caustic(site))
     }
 
     /// Reflected indirect radiance at a Lambertian surface from the precomputed irradiance
@@ -500,9 +502,9 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Option<Vec3> {
-        let (f, ns) = Self::site_query(self.irradiance, hit, wo, m, c)?;
-        let e = c.timed(Part::Gathers, || self.irradiance.lookup_indirect(hit.p, ns, &mut scratch.sites))?;
-        Some(f * e)
+        let (f, ns) = Self::site_query(&self.irradiance, hit, wo, m, c)?;
+        let site = c.timed(Part::Gathers, || self.irradiance.find_indirect(hit.p, ns, &mut scratch.sites))?;
+        Some(f * self.irradiance.indirect(site, ns))
     }
 
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a

@@ -11,23 +11,56 @@
 //! same reason; here it is computed at each site with shadow rays, since the first photon hits
 //! are not stored).
 
+//!
+//! The values are estimated on demand, a block of neighbouring sites at a time, when a lookup
+//! first reads one of the block's sites: a view sees part of the scene, and the sites it never
+//! reads are never estimated (on the default scenes the camera reads 14 % of the doorway's
+//! sites, 69 % of the Cornell box's). A block's values depend only on its sites and the maps,
+//! so they are the same whichever thread estimates them and whenever.
+
 use super::kdtree::{KdPoint, KdTree, Neighbor};
 use super::map::{GatherParams, Hits, PhotonMap};
 use super::pack;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
 
-/// A precomputed irradiance sample: 32 bytes.
+/// A site in the search tree: 28 bytes.
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 struct Site {
     pos: [f32; 3],
-    normal: u32,
+    /// The unit normal on the side its photon arrived from.
+    normal: [f32; 3],
+    /// Its place in Morton order (and so its block).
+    order: u32,
+}
+
+impl Site {
+    #[inline(always)]
+    fn normal(&self) -> Vec3 {
+        Vec3::from_array(self.normal)
+    }
+}
+
+/// A site's irradiance, packed over its block's scale: 16 bytes.
+#[derive(Clone, Copy, Debug, Default)]
+struct Values {
     direct: u32,
     indirect: u32,
     caustic: u32,
     /// Indirect irradiance on the other side (the side of `-normal`).
     indirect_back: u32,
+}
+
+/// The values of a block of [`SITE_BLOCK`] sites (consecutive in Morton order).
+#[derive(Debug)]
+struct Block {
+    /// The values pack irradiance divided by this power of two (see [`pack::rgb9e5_scale`]),
+    /// so that any light power fits RGB9E5's range.
+    scale: f32,
+    values: Box<[Values]>,
 }
 
 /// Irradiance at a surface point, by the kind of light path that brought it.
@@ -50,22 +83,58 @@ const CANDIDATES: usize = 8;
 /// Smallest cosine between a site's normal and the surface's.
 const NORMAL_COS: f32 = 0.9;
 
-/// Irradiance at photon positions, for fast diffuse lookups.
+/// Irradiance at photon positions, for fast diffuse lookups: the sites, indexed, and their
+/// values as far as they have been estimated (read through [`Sites`]).
 #[derive(Debug, Default)]
 pub struct PrecomputedIrradiance {
     tree: KdTree<Site>,
     /// Largest distance at which a site is used.
     max_radius: f32,
-    /// Sites pack irradiance divided by this power of two (see [`pack::rgb9e5_scale`]),
-    /// so that any light power fits RGB9E5's range.
-    scale: f32,
+    /// The sites' places in the tree, in Morton order ([`SITE_BLOCK`] to a block).
+    in_tree: Vec<u32>,
+    /// Their error bounds, in Morton order, when kept (for the direct light at a site).
+    errors: Vec<Vec3>,
+    blocks: Vec<OnceLock<Block>>,
+    /// Sites estimated so far, and the thread time it took (nanoseconds).
+    estimated: AtomicU64,
+    estimate_ns: AtomicU64,
 }
 
-/// A thread's scratch space for [`PrecomputedIrradiance::lookup`] and
-/// [`PrecomputedIrradiance::lookup_indirect`]. It remembers the last site found, which starts the
-/// next search (a camera pixel's samples, looked up one after the other, mostly land by the same
-/// site), and every site around the last place searched (a neighbourhood), which answers most
-/// of the next queries without a search: the answers do not depend on either, only the time.
+/// Direct irradiance at a site: `direct(i, site)`, `i` the site's place in Morton order.
+pub type SiteDirect<'a> = dyn Fn(usize, &SitePoint) -> Vec3 + Sync + 'a;
+
+/// What the values of a [`PrecomputedIrradiance`]'s sites are estimated from: the maps its
+/// sites were picked from (or, for caustic sites, whose light they read), the gathers, and the
+/// direct irradiance at a site (`direct(i, site)`, `i` the site's place in Morton order; none:
+/// zero).
+#[derive(Clone, Copy)]
+pub struct SiteSource<'m> {
+    pub indirect: &'m [PhotonMap],
+    pub caustic: &'m [PhotonMap],
+    pub gather: &'m GatherParams,
+    pub caustic_gather: &'m GatherParams,
+    pub direct: Option<&'m SiteDirect<'m>>,
+}
+
+/// The sites of a [`PrecomputedIrradiance`] with what their values are estimated from: its
+/// lookups. A lookup first finds a site (`find_*`: where the time goes on the camera's side),
+/// then reads its value, estimating the site's block if no lookup has before.
+#[derive(Clone, Copy)]
+pub struct Sites<'c> {
+    cache: &'c PrecomputedIrradiance,
+    source: SiteSource<'c>,
+}
+
+/// A site found by a lookup of [`Sites`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SiteRef(u32);
+
+/// A thread's scratch space for the lookups of [`Sites`] ([`Sites::find`],
+/// [`Sites::find_indirect`], [`Sites::find_caustic`]). It remembers the last site found, which
+/// starts the next search (a camera pixel's samples, looked up one after the other, mostly land
+/// by the same site), and every site around the last place searched (a neighbourhood), which
+/// answers most of the next queries without a search: the answers do not depend on either,
+/// only the time.
 #[derive(Debug, Default)]
 pub struct LookupScratch {
     rejected: Vec<Neighbor>,
@@ -189,12 +258,7 @@ impl Neighbourhood {
         self.sites.extend(self.found.iter().map(|n| {
             let s = tree.get(n.index);
             let from_centre = n.dist2.sqrt();
-            NearSite {
-                pos: s.position(),
-                normal: pack::decode_dir_oct(s.normal),
-                from_centre,
-                index: n.index,
-            }
+            NearSite { pos: s.position(), normal: s.normal(), from_centre, index: n.index }
         }));
     }
 }
@@ -215,86 +279,108 @@ pub fn pick_sites(maps: &[Hits], stride: usize) -> Vec<SitePoint> {
         .collect()
 }
 
-/// Sites estimated by one task of [`PrecomputedIrradiance::build`] (and reported at once).
-pub const SITE_BLOCK: usize = 1024;
+/// Sites a block holds: estimated together, one after the other, each search starting from
+/// the last one's radius (the guess chain restarts at every block, so a block's values do not
+/// depend on which blocks were estimated before it, nor by which thread).
+pub const SITE_BLOCK: usize = 32;
 
 impl PrecomputedIrradiance {
-    /// Estimates the irradiance at each site (in parallel) and indexes the sites: indirect and
-    /// caustic from the maps, direct from `direct(site_index, site)`; `done(n)` is told of every
-    /// `n` sites estimated (in blocks of [`SITE_BLOCK`], for a progress bar).
-    pub fn build(
-        sites: Vec<SitePoint>,
-        indirect: &[PhotonMap],
-        caustic: &[PhotonMap],
-        gather: &GatherParams,
-        caustic_gather: &GatherParams,
-        direct: impl Fn(usize, &SitePoint) -> Vec3 + Sync,
-        done: impl Fn(u64) + Sync,
-    ) -> Self {
-        // Photons come in the order they were traced, scattered over the scene; gathering in
-        // Morton order makes consecutive queries walk the same part of the tree (a cache win
-        // only: every site's value is the same in any order).
+    /// Indexes `sites`, whose values will be estimated on demand (read them through
+    /// [`PrecomputedIrradiance::sites`]); a site is read within `max_radius`. `keep_errors`:
+    /// keep the sites' error bounds, which a [`SiteSource`] with direct light needs (its
+    /// shadow rays leave from the sites).
+    pub fn new(sites: Vec<SitePoint>, max_radius: f32, keep_errors: bool) -> Self {
+        // Photons come in the order they were traced, scattered over the scene; estimating in
+        // Morton order makes consecutive queries walk the same part of the tree, and puts
+        // nearby sites in one block.
         let mut sites = sites;
         morton_sort(&mut sites);
-        let indirect_maps = indirect;
-        let values: Vec<(SitePoint, Irradiance, Vec3)> = sites
-            .par_chunks(SITE_BLOCK)
+        let errors = if keep_errors { sites.iter().map(|s| s.err).collect() } else { Vec::new() };
+        let tree_sites = sites
+            .par_iter()
             .enumerate()
-            .flat_map_iter(|(block, chunk)| {
-                let mut scratch: Vec<Neighbor> = Vec::new();
-                // Consecutive sites are near each other: each map's search starts from the last
-                // one's radius (within the block only, so that a block's values do not depend
-                // on how the blocks are shared among threads).
-                let mut guesses = vec![0.0f32; indirect_maps.len()];
-                let out: Vec<_> = chunk
+            .map(|(i, p)| Site { pos: p.pos.to_array(), normal: p.n.to_array(), order: i as u32 })
+            .collect();
+        let tree = KdTree::build(tree_sites);
+        let mut in_tree = vec![0u32; sites.len()];
+        for (i, s) in tree.items().iter().enumerate() {
+            in_tree[s.order as usize] = i as u32;
+        }
+        let blocks = (0..sites.len().div_ceil(SITE_BLOCK)).map(|_| OnceLock::new()).collect();
+        PrecomputedIrradiance {
+            tree,
+            max_radius,
+            in_tree,
+            errors,
+            blocks,
+            estimated: AtomicU64::new(0),
+            estimate_ns: AtomicU64::new(0),
+        }
+    }
+
+    /// The lookups, with what the values are estimated from (the maps the sites were made for).
+    pub fn sites<'c>(&'c self, source: SiteSource<'c>) -> Sites<'c> {
+        Sites { cache: self, source }
+    }
+
+    /// Sites whose values have been estimated so far, and the thread time it took (seconds).
+    pub fn estimated(&self) -> (u64, f64) {
+        (self.estimated.load(Ordering::Relaxed), self.estimate_ns.load(Ordering::Relaxed) as f64 * 1e-9)
+    }
+
+    /// Estimates block `b`: indirect (both sides) and caustic irradiance from the maps, direct
+    /// from `direct`.
+    fn estimate(&self, b: usize, source: &SiteSource<'_>) -> Block {
+        let start = std::time::Instant::now();
+        let first = b * SITE_BLOCK;
+        let in_block = &self.in_tree[first..(first + SITE_BLOCK).min(self.in_tree.len())];
+        assert!(
+            source.direct.is_none() || !self.errors.is_empty(),
+            "direct light at sites indexed without their error bounds"
+        );
+        let mut scratch: Vec<Neighbor> = Vec::new();
+        // Consecutive sites are near each other: each map's search starts from the last one's
+        // radius.
+        let mut guesses = vec![0.0f32; source.indirect.len()];
+        let raw: Vec<(Irradiance, Vec3)> = in_block
+            .iter()
+            .enumerate()
+            .map(|(j, &t)| {
+                let site = self.tree.get(t);
+                let (pos, n) = (site.position(), site.normal());
+                let [mut indirect, mut back] = [Vec3::ZERO; 2];
+                for (m, guess) in source.indirect.iter().zip(&mut guesses) {
+                    let [f, b] = m.irradiance_sides_near(pos, n, source.gather, guess, &mut scratch);
+                    (indirect, back) = (indirect + f, back + b);
+                }
+                let caustic = source
+                    .caustic
                     .iter()
-                    .enumerate()
-                    .map(|(j, &site)| {
-                        let (pos, n) = (site.pos, site.n);
-                        let [mut indirect, mut back] = [Vec3::ZERO; 2];
-                        for (m, guess) in indirect_maps.iter().zip(&mut guesses) {
-                            let [f, b] = m.irradiance_sides_near(pos, n, gather, guess, &mut scratch);
-                            (indirect, back) = (indirect + f, back + b);
-                        }
-                        let caustic =
-                            caustic.iter().map(|m| m.irradiance(pos, n, caustic_gather, &mut scratch)).sum();
-                        let i = block * SITE_BLOCK + j;
-                        (site, Irradiance { direct: direct(i, &site), indirect, caustic }, back)
-                    })
-                    .collect();
-                done(chunk.len() as u64);
-                out
+                    .map(|m| m.irradiance(pos, n, source.caustic_gather, &mut scratch))
+                    .sum();
+                let direct = source
+                    .direct
+                    .map_or(Vec3::ZERO, |d| d(first + j, &SitePoint { pos, err: self.errors[first + j], n }));
+                (Irradiance { direct, indirect, caustic }, back)
             })
             .collect();
-        let largest = values
-            .par_iter()
-            .map(|(_, e, back)| e.direct.max(e.indirect).max(e.caustic).max(*back).max_element())
-            .reduce(|| 0.0, f32::max);
+        let largest = raw
+            .iter()
+            .map(|(e, back)| e.direct.max(e.indirect).max(e.caustic).max(*back).max_element())
+            .fold(0.0, f32::max);
         let scale = pack::rgb9e5_scale(largest);
-        let sites = values
-            .into_par_iter()
-            .map(|(site, e, back)| Site {
-                pos: site.pos.to_array(),
-                normal: pack::encode_dir_oct(site.n),
+        let values = raw
+            .iter()
+            .map(|(e, back)| Values {
                 direct: pack::rgb9e5_encode(e.direct / scale),
                 indirect: pack::rgb9e5_encode(e.indirect / scale),
                 caustic: pack::rgb9e5_encode(e.caustic / scale),
-                indirect_back: pack::rgb9e5_encode(back / scale),
+                indirect_back: pack::rgb9e5_encode(*back / scale),
             })
             .collect();
-        PrecomputedIrradiance { tree: KdTree::build(sites), max_radius: gather.max_radius, scale }
-    }
-
-    /// Caustic irradiance at `sites` (points independent of the photons of `caustic`: an
-    /// estimate at one of its own photons would count that photon), read with
-    /// [`PrecomputedIrradiance::lookup_caustic`] within `gather`'s largest radius.
-    pub fn build_caustic(
-        sites: Vec<SitePoint>,
-        caustic: &[PhotonMap],
-        gather: &GatherParams,
-        done: impl Fn(u64) + Sync,
-    ) -> Self {
-        Self::build(sites, &[], caustic, gather, gather, |_, _| Vec3::ZERO, done)
+        self.estimated.fetch_add(in_block.len() as u64, Ordering::Relaxed);
+        self.estimate_ns.fetch_add(start.elapsed().as_nanos() as u64, Ordering::Relaxed);
+        Block { scale, values }
     }
 
     pub fn len(&self) -> usize {
@@ -305,54 +391,17 @@ impl PrecomputedIrradiance {
         self.tree.is_empty()
     }
 
+    /// Memory held: the index, the sites' points and the values estimated so far.
     pub fn bytes(&self) -> usize {
+        let estimated = self.estimated.load(Ordering::Relaxed) as usize;
         self.tree.bytes()
+            + self.in_tree.len() * std::mem::size_of::<u32>()
+            + self.errors.len() * std::mem::size_of::<Vec3>()
+            + self.blocks.len() * std::mem::size_of::<OnceLock<Block>>()
+            + estimated * std::mem::size_of::<Values>()
     }
 
-    /// Irradiance at `x` on the side of unit normal `ns`, from the nearest site whose normal
-    /// agrees; `None` if no site is near enough.
-    #[inline]
-    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Irradiance> {
-        let matches = |s: &Site| pack::decode_dir_oct(s.normal).dot(ns) >= NORMAL_COS;
-        let (hint, rejected) = (scratch.last, &mut scratch.rejected);
-        let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, matches, hint, rejected);
-        scratch.last = best.map(|b| b.index);
-        let s = self.tree.get(best?.index);
-        Some(Irradiance {
-            direct: pack::rgb9e5_decode(s.direct) * self.scale,
-            indirect: pack::rgb9e5_decode(s.indirect) * self.scale,
-            caustic: pack::rgb9e5_decode(s.caustic) * self.scale,
-        })
-    }
-}
-
-impl PrecomputedIrradiance {
-    /// Indirect irradiance at `x` on the side of unit normal `ns`, from the nearest site lying
-    /// either way (its normal along `ns` or against it: each site holds both sides' indirect
-    /// irradiance) among the nearest eight (`CANDIDATES`); `None` if none is near enough. Where only
-    /// one side of a surface gets photons, its other side is still found (the outside of a
-    /// room, dark: without it each such camera hit fell back to a full gather to find zero).
-    /// Queries that the sites held in `scratch` decide ([`LookupScratch::expect`]) are answered
-    /// from them: the same answer, without a search.
-    #[inline]
-    pub fn lookup_indirect(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
-        let s = self.tree.get(self.indirect_site(x, ns, scratch)?);
-        let front = pack::decode_dir_oct(s.normal).dot(ns) > 0.0;
-        Some(pack::rgb9e5_decode(if front { s.indirect } else { s.indirect_back }) * self.scale)
-    }
-
-    /// Caustic irradiance at `x` on the side of unit normal `ns`, from the nearest site whose
-    /// normal agrees (within 25 degrees) among the nearest eight, or `None` (no site near
-    /// enough, or none facing the same way: the far side of a lit wall, a corner), where the
-    /// caller gathers: where the sites are sparse the map's photons are too, and such gathers
-    /// are few and cheap. Read as the indirect sites are ([`LookupScratch::expect`]).
-    #[inline]
-    pub fn lookup_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
-        let i = self.site(x, |n: Vec3| n.dot(ns) >= NORMAL_COS, scratch)?;
-        Some(pack::rgb9e5_decode(self.tree.get(i).caustic) * self.scale)
-    }
-
-    /// The site [`PrecomputedIrradiance::lookup_indirect`] reads.
+    /// The site [`Sites::find_indirect`] finds.
     #[inline]
     fn indirect_site(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<u32> {
         self.site(x, |n: Vec3| n.dot(ns).abs() >= NORMAL_COS, scratch)
@@ -368,7 +417,7 @@ impl PrecomputedIrradiance {
         let index = match scratch.near.answer(x, CANDIDATES, self.max_radius, &parallel) {
             Known::Answer(index) => index,
             Known::Unknown => {
-                let accept = |s: &Site| parallel(pack::decode_dir_oct(s.normal));
+                let accept = |s: &Site| parallel(s.normal());
                 let (hint, rejected) = (scratch.last, &mut scratch.rejected);
                 let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, accept, hint, rejected);
                 // The sites of the region the query lies in, wide enough that the others in it
@@ -383,6 +432,105 @@ impl PrecomputedIrradiance {
         };
         scratch.last = index;
         index
+    }
+}
+
+impl Sites<'_> {
+    /// Whether there are no sites.
+    pub fn is_empty(&self) -> bool {
+        self.cache.is_empty()
+    }
+
+    /// The nearest site to `x` whose normal agrees with the unit normal `ns` (within 25
+    /// degrees) among the nearest eight; `None` if none is near enough.
+    #[inline]
+    pub fn find(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
+        let tree = &self.cache.tree;
+        let matches = |s: &Site| s.normal().dot(ns) >= NORMAL_COS;
+        let (hint, rejected) = (scratch.last, &mut scratch.rejected);
+        let best = tree.nearest_among(x, CANDIDATES, self.cache.max_radius, matches, hint, rejected);
+        scratch.last = best.map(|b| b.index);
+        best.map(|b| SiteRef(b.index))
+    }
+
+    /// The site for the indirect irradiance at `x` on the side of unit normal `ns`: the nearest
+    /// lying either way (its normal along `ns` or against it: each site holds both sides'
+    /// indirect irradiance) among the nearest eight (`CANDIDATES`); `None` if none is near
+    /// enough. Where only one side of a surface gets photons, its other side is still found
+    /// (the outside of a room, dark: without it each such camera hit fell back to a full
+    /// gather to find zero). Queries that the sites held in `scratch` decide
+    /// ([`LookupScratch::expect`]) are answered from them: the same answer, without a search.
+    #[inline]
+    pub fn find_indirect(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
+        self.cache.indirect_site(x, ns, scratch).map(SiteRef)
+    }
+
+    /// The site for the caustic irradiance at `x` on the side of unit normal `ns`: the
+    /// nearest whose normal agrees (within 25 degrees) among the nearest eight, or `None` (no
+    /// site near enough, or none facing the same way: the far side of a lit wall, a corner),
+    /// where the caller gathers: where the sites are sparse the map's photons are too, and
+    /// such gathers are few and cheap. Found as the indirect sites are
+    /// ([`LookupScratch::expect`]).
+    #[inline]
+    pub fn find_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
+        self.cache.site(x, |n: Vec3| n.dot(ns) >= NORMAL_COS, scratch).map(SiteRef)
+    }
+
+    /// Site `s`'s values, unpacked by `unpack` with its block's scale (the block estimated
+    /// first if it has not been).
+    #[inline]
+    fn values<T>(&self, s: SiteRef, unpack: impl FnOnce(&Values, f32) -> T) -> T {
+        let order = self.cache.tree.get(s.0).order as usize;
+        let b = order / SITE_BLOCK;
+        let block = self.cache.blocks[b].get_or_init(|| self.cache.estimate(b, &self.source));
+        unpack(&block.values[order % SITE_BLOCK], block.scale)
+    }
+
+    /// The irradiance at site `s`, by kind of path.
+    pub fn irradiance(&self, s: SiteRef) -> Irradiance {
+        self.values(s, |v, scale| Irradiance {
+            direct: pack::rgb9e5_decode(v.direct) * scale,
+            indirect: pack::rgb9e5_decode(v.indirect) * scale,
+            caustic: pack::rgb9e5_decode(v.caustic) * scale,
+        })
+    }
+
+    /// The indirect irradiance at site `s` on the side of unit normal `ns`.
+    #[inline]
+    pub fn indirect(&self, s: SiteRef, ns: Vec3) -> Vec3 {
+        let front = self.cache.tree.get(s.0).normal().dot(ns) > 0.0;
+        self.values(s, |v, scale| {
+            pack::rgb9e5_decode(if front { v.indirect } else { v.indirect_back }) * scale
+        })
+    }
+
+    /// The caustic irradiance at site `s`.
+    #[inline]
+    pub fn caustic(&self, s: SiteRef) -> Vec3 {
+        self.values(s, |v, scale| pack::rgb9e5_decode(v.caustic) * scale)
+    }
+
+    /// [`Sites::find`], then the site's irradiance.
+    pub fn lookup(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Irradiance> {
+        self.find(x, ns, scratch).map(|s| self.irradiance(s))
+    }
+
+    /// [`Sites::find_indirect`], then the site's indirect irradiance on the side of `ns`.
+    pub fn lookup_indirect(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
+        self.find_indirect(x, ns, scratch).map(|s| self.indirect(s, ns))
+    }
+
+    /// [`Sites::find_caustic`], then the site's caustic irradiance.
+    pub fn lookup_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<Vec3> {
+        self.find_caustic(x, ns, scratch).map(|s| self.caustic(s))
+    }
+
+    /// Estimates every block not estimated yet, in parallel.
+    pub fn estimate_all(&self) {
+        let cache = self.cache;
+        cache.blocks.par_iter().enumerate().for_each(|(b, block)| {
+            block.get_or_init(|| cache.estimate(b, &self.source));
+        });
     }
 }
 
@@ -417,6 +565,16 @@ mod tests {
     use crate::photon::map::MapColor;
     use crate::photon::map::PhotonHit;
 
+    /// What the tests' sites are estimated from: `indirect` and `caustic` maps, one gather.
+    fn source<'m>(
+        indirect: &'m [PhotonMap],
+        caustic: &'m [PhotonMap],
+        params: &'m GatherParams,
+        direct: Option<&'m SiteDirect<'m>>,
+    ) -> SiteSource<'m> {
+        SiteSource { indirect, caustic, gather: params, caustic_gather: params, direct }
+    }
+
     #[test]
     fn lookup_returns_the_nearest_site_with_a_matching_normal() {
         // Photons on the floor (normal +Y) and on a wall (normal +X) meeting at the origin.
@@ -444,15 +602,9 @@ mod tests {
         let sites = pick_sites(&[Hits::from(hits.clone())], 3);
         let map = PhotonMap::build(hits, MapColor::Rgb, 20000);
         let params = GatherParams { k: 50, max_radius: 0.2, kernel: Kernel::Box, flatten: 8.0 };
-        let cache = PrecomputedIrradiance::build(
-            sites,
-            std::slice::from_ref(&map),
-            &[],
-            &params,
-            &params,
-            |_, _| Vec3::X,
-            |_| {},
-        );
+        let cache = PrecomputedIrradiance::new(sites, params.max_radius, true);
+        let direct = |_: usize, _: &SitePoint| Vec3::X;
+        let cache = cache.sites(source(std::slice::from_ref(&map), &[], &params, Some(&direct)));
         let mut scratch = LookupScratch::default();
         // 1e-4 W per photon at 1e4 photons per m^2: E = 1 W/m^2 on each plane.
         let e = cache.lookup(Vec3::new(0.5, 0.0, 0.5), Vec3::Y, &mut scratch).expect("a floor site");
@@ -463,6 +615,42 @@ mod tests {
         assert!((e.indirect.x - 1.0).abs() < 0.1, "{e:?}");
         // Seen from below the floor nothing matches.
         assert!(cache.lookup(Vec3::new(0.5, 0.0, 0.5), -Vec3::Y, &mut scratch).is_none());
+    }
+
+    /// Values are estimated as they are first read, a block at a time, and are the same
+    /// whichever order, thread or block came first: read one by one in a scrambled order, they
+    /// are bit for bit those of every block estimated at once in parallel; the first site read
+    /// estimates its own block and no other.
+    #[test]
+    fn values_estimated_on_demand_are_the_same_in_any_order() {
+        use rand::seq::SliceRandom;
+        use rand::SeedableRng;
+        let hits = crate::photon::map::uniform_floor(20_000, 1.0, 7);
+        let map = PhotonMap::build(hits.clone(), MapColor::Rgb, 20_000);
+        let params = GatherParams { k: 30, max_radius: 0.1, kernel: Kernel::Cone, flatten: 4.0 };
+        let make = || PrecomputedIrradiance::new(pick_sites(&[Hits::from(hits.clone())], 4), 0.1, false);
+        let (eager, lazy) = (make(), make());
+        let from = source(std::slice::from_ref(&map), &[], &params, None);
+        let (all, read) = (eager.sites(from), lazy.sites(from));
+        all.estimate_all();
+        assert_eq!(eager.estimated().0, eager.len() as u64);
+        assert_eq!(lazy.estimated().0, 0);
+        let mut order: Vec<u32> = (0..lazy.len() as u32).collect();
+        order.shuffle(&mut rand_pcg::Pcg32::seed_from_u64(8));
+        read.irradiance(SiteRef(order[0]));
+        assert_eq!(lazy.estimated().0, SITE_BLOCK as u64);
+        for &i in &order {
+            let s = SiteRef(i);
+            assert_eq!(read.irradiance(s), all.irradiance(s), "site {i}");
+            for ns in [Vec3::Y, -Vec3::Y] {
+                assert_eq!(
+                    read.indirect(s, ns).to_array().map(f32::to_bits),
+                    all.indirect(s, ns).to_array().map(f32::to_bits)
+                );
+            }
+        }
+        assert!(all.irradiance(SiteRef(order[0])).indirect.x > 0.0);
+        assert_eq!(lazy.estimated().0, lazy.len() as u64);
     }
 
     /// Caustic sites: a lit floor reads its nearest site's value, the floor seen from below
@@ -487,8 +675,9 @@ mod tests {
         let sites = pick_sites(&[Hits::from(hits.iter().map(between).collect::<Vec<_>>())], 1);
         let map = PhotonMap::build(hits, MapColor::Rgb, 10_000);
         let params = GatherParams { k: 30, max_radius: 0.1, kernel: Kernel::Cone, flatten: 8.0 };
-        let cache = PrecomputedIrradiance::build_caustic(sites, std::slice::from_ref(&map), &params, |_| {});
+        let cache = PrecomputedIrradiance::new(sites, params.max_radius, false);
         assert_eq!(cache.len(), 10_000);
+        let cache = cache.sites(source(&[], std::slice::from_ref(&map), &params, None));
         for held in [false, true] {
             let mut scratch = LookupScratch::default();
             let mut at = |x: Vec3, ns: Vec3| {
@@ -524,16 +713,8 @@ mod tests {
         let sites = pick_sites(&[Hits::from(hits.clone())], 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, n as u64);
         let params = GatherParams { k: 100, max_radius: 1.0, kernel: Kernel::Cone, flatten: 4.0 };
-        let no_direct = |_: usize, _: &SitePoint| Vec3::ZERO;
-        let cache = PrecomputedIrradiance::build(
-            sites,
-            std::slice::from_ref(&map),
-            &[],
-            &params,
-            &params,
-            no_direct,
-            |_| {},
-        );
+        let cache = PrecomputedIrradiance::new(sites, params.max_radius, false);
+        let cache = cache.sites(source(std::slice::from_ref(&map), &[], &params, None));
         let (mut scratch, mut kept) = (Vec::new(), LookupScratch::default());
         let (mut gathered, mut read) = (0.0f64, 0.0f64);
         let queries = 20_000;
@@ -580,18 +761,9 @@ mod tests {
                     }
                 })
                 .collect();
-            let sites = pick_sites(&[Hits::from(hits.clone())], 4);
-            let map = PhotonMap::build(hits, MapColor::Rgb, 30000);
+            let sites = pick_sites(&[Hits::from(hits)], 4);
             let params = GatherParams { k: 20, max_radius: 0.05, kernel: Kernel::Box, flatten: 8.0 };
-            let cache = PrecomputedIrradiance::build(
-                sites,
-                std::slice::from_ref(&map),
-                &[],
-                &params,
-                &params,
-                |_, _| Vec3::ZERO,
-                |_| {},
-            );
+            let cache = PrecomputedIrradiance::new(sites, params.max_radius, false);
             let mut kept = LookupScratch::default();
             let (mut answered, mut total) = (0, 0);
             for pixel in [0.002f32, 0.01, 0.05, 0.3] {

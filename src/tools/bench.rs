@@ -20,7 +20,7 @@ use crate::frame::{Progress, Quiet};
 use crate::geometry::Ray;
 use crate::integrator::{Control, Prepared, RenderOutput};
 use crate::scene::Scene;
-use crate::stats::{RawRays, Stats};
+use crate::stats::{RawRays, Stats, SITE_RECORDS};
 use crate::tools::agree::{generate_rays, RayKind};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
@@ -164,6 +164,7 @@ pub struct BenchRow {
     /// Medians of the camera stage's shares of thread time ([`crate::stats::CameraTime`]).
     pub camera_rays_share: f64,
     pub camera_gathers_share: f64,
+    pub camera_estimate_share: f64,
     pub camera_rest_share: f64,
     /// Bytes of the photon maps (kd-tree included) per stored photon.
     pub bytes_per_photon: f64,
@@ -229,7 +230,7 @@ pub fn median(mut v: Vec<f64>) -> f64 {
 /// Bytes per stored photon over the photon maps of a render (the precomputed irradiance excluded);
 /// `bytes` is the largest map of the render's passes, so stored photons are counted per pass.
 fn bytes_per_photon(stats: &Stats) -> f64 {
-    let maps = stats.photons.iter().filter(|(k, _)| k.as_str() != "irradiance_cache").map(|(_, m)| m);
+    let maps = stats.photons.iter().filter(|(k, _)| !SITE_RECORDS.contains(&k.as_str())).map(|(_, m)| m);
     let (bytes, stored) = maps.fold((0u64, 0u64), |(b, s), m| (b + m.bytes, s + m.stored));
     let per_pass = stored as f64 / stats.passes.max(1) as f64;
     if per_pass > 0.0 {
@@ -305,6 +306,7 @@ pub fn run(
             rays_to_raw_ratio: m(&|s| s.rays_to_raw_ratio),
             camera_rays_share: m(&|s| s.camera_time.rays_share),
             camera_gathers_share: m(&|s| s.camera_time.gathers_share),
+            camera_estimate_share: m(&|s| s.camera_time.estimate_share),
             camera_rest_share: m(&|s| s.camera_time.rest_share),
             bytes_per_photon: m(&bytes_per_photon),
             speedup,
@@ -383,6 +385,7 @@ impl fmt::Display for BenchReport {
         line(f, "render / raw", &|r| format!("{:.3}", r.rays_to_raw_ratio))?;
         line(f, "camera stage: ray casting", &|r| format!("{:.3}", r.camera_rays_share))?;
         line(f, "  gathers and lookups", &|r| format!("{:.3}", r.camera_gathers_share))?;
+        line(f, "  irradiance estimated as read", &|r| format!("{:.3}", r.camera_estimate_share))?;
         line(f, "  the rest", &|r| format!("{:.3}", r.camera_rest_share))?;
         line(f, "bytes per stored photon", &|r| format!("{:.2}", r.bytes_per_photon))?;
         line(f, "speed-up", &|r| format!("{:.2}", r.speedup))?;
