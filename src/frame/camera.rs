@@ -165,7 +165,7 @@ const ROWS_A_JOB: usize = 2;
 /// Runs `pixel(x, y, state, rng, scratch, counters)` on every pixel of a `width`-wide image,
 /// rows in parallel, and returns the radiance it gives for each as a film. `states` holds one
 /// state per pixel (row-major) that the call may update; `scratch` is per job of rows (see
-/// [`ROWS_A_JOB`]).
+/// `ROWS_A_JOB`).
 pub fn for_each_pixel<S, T, F>(
     width: usize,
     states: &mut [S],
