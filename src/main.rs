@@ -22,6 +22,13 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 fn main() -> ExitCode {
+    if let Err(missing) = cpu_supported() {
+        eprintln!(
+            "photonmap: error: this build needs a CPU with {missing} (x86-64-v3, set in \
+             .cargo/config.toml); rebuild with RUSTFLAGS=\"-C target-cpu=x86-64\" for this one"
+        );
+        return ExitCode::FAILURE;
+    }
     let cli = cli::parse();
     let result = match cli.command {
         Command::Render(args) => match render(*args) {
@@ -51,6 +58,30 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// Whether the CPU has the instruction-set extensions this build was compiled for (the project
+/// builds for x86-64-v3: `.cargo/config.toml`), or the first one missing: checked before
+/// anything else runs, so an older CPU gets a line saying so instead of an illegal
+/// instruction.
+#[inline(never)]
+fn cpu_supported() -> Result<(), &'static str> {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    {
+        let features = [
+            ("avx2", std::arch::is_x86_feature_detected!("avx2")),
+            ("fma", std::arch::is_x86_feature_detected!("fma")),
+            ("bmi1", std::arch::is_x86_feature_detected!("bmi1")),
+            ("bmi2", std::arch::is_x86_feature_detected!("bmi2")),
+            ("lzcnt", std::arch::is_x86_feature_detected!("lzcnt")),
+            ("movbe", std::arch::is_x86_feature_detected!("movbe")),
+            ("f16c", std::arch::is_x86_feature_detected!("f16c")),
+        ];
+        if let Some((name, _)) = features.iter().find(|(_, present)| !present) {
+            return Err(name);
+        }
+    }
+    Ok(())
 }
 
 /// An error and its causes on one line, each cause said once: a cause whose text the message
