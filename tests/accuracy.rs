@@ -105,14 +105,23 @@ fn every_mode_stays_close_to_the_reference() {
     }
 }
 
-/// A fixed seed gives the same image, bit for bit, on one thread and on several.
+/// A fixed seed gives the same image, bit for bit, on one thread and on several, with the
+/// radiance estimate and with final gathering (whose rays read the sites' direct light too,
+/// estimated by whichever thread reads a site first).
 #[test]
 fn same_seed_same_image_for_any_thread_count() {
     let s = scene("caustics");
     let settings =
         RenderSettings { spp: Some(2), photons: Some(20_000), caustic_photons: Some(20_000), ..settings() };
-    let run = |threads| common::on_threads(threads, || render(&s, &settings));
-    let one = run(1);
-    assert_eq!(one, run(2));
-    assert_eq!(one, run(3));
+    let gathered = RenderSettings {
+        indirect: Some(IndirectMode::FinalGather),
+        final_gather_rays: Some(4),
+        ..settings.clone()
+    };
+    for settings in [settings, gathered] {
+        let run = |threads| common::on_threads(threads, || render(&s, &settings));
+        let one = run(1);
+        assert_eq!(one, run(2));
+        assert_eq!(one, run(3));
+    }
 }
