@@ -102,7 +102,13 @@ pub struct Stats {
 
 /// The records of [`Stats::photons`] that hold precomputed-irradiance sites, not photons:
 /// `stored` sites, `seen` of them estimated (those the camera read), no photon emitted.
-pub const SITE_RECORDS: [&str; 2] = ["irradiance_cache", "caustic_cache"];
+pub const SITE_RECORDS: [&str; 2] = [IRRADIANCE_SITES, CAUSTIC_SITES];
+
+/// The record of the indirect precomputed irradiance's sites.
+pub const IRRADIANCE_SITES: &str = "irradiance_cache";
+
+/// The record of the caustic sites.
+pub const CAUSTIC_SITES: &str = "caustic_cache";
 
 /// The camera stage's thread time (the per-pixel loops, summed over threads) and its shares:
 /// ray casting, photon gathers and irradiance lookups, estimating the precomputed irradiance

@@ -22,7 +22,7 @@ use crate::photon::irradiance::{
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
 use crate::sampling::derive_seed;
-use crate::stats::{MapStats, Stats, SITE_RECORDS};
+use crate::stats::{MapStats, Stats, CAUSTIC_SITES, IRRADIANCE_SITES};
 use glam::Vec3;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
@@ -175,7 +175,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         }
         let reason = format!("{} sites where caustic paths land, estimated as read", sites.len());
         let radius = self.gathers.caustic.max_radius;
-        index_sites(stats, "irradiance.caustic", SITE_RECORDS[1], reason, || {
+        index_sites(stats, "irradiance.caustic", CAUSTIC_SITES, reason, || {
             PrecomputedIrradiance::new(sites, radius, false)
         })
     }
@@ -197,7 +197,7 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         let radius = self.gathers.indirect.max_radius;
         // Final gathering reads the direct light at the sites, whose shadow rays leave from them.
         let keep_errors = self.cfg.indirect == IndirectMode::FinalGather;
-        index_sites(stats, "irradiance", SITE_RECORDS[0], reason, || {
+        index_sites(stats, "irradiance", IRRADIANCE_SITES, reason, || {
             PrecomputedIrradiance::new(sites, radius, keep_errors)
         })
     }
@@ -313,8 +313,8 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
             )
         });
         let mut c = c;
-        let after = record_estimated(stats, SITE_RECORDS[0], &made.irradiance)
-            + record_estimated(stats, SITE_RECORDS[1], &made.caustic);
+        let after = record_estimated(stats, IRRADIANCE_SITES, &made.irradiance)
+            + record_estimated(stats, CAUSTIC_SITES, &made.caustic);
         c.clock.estimate_ns = ((after - before).max(0.0) * 1e9) as u64;
         (film.into(), c)
     }
@@ -492,7 +492,7 @@ impl<A: Accel> Shading<'_, '_, A> {
     }
 
     /// Reflected indirect radiance at a Lambertian surface from the precomputed irradiance
-    /// (either side of a site: [`PrecomputedIrradiance::lookup_indirect`]), or `None`.
+    /// (either side of a site: [`Sites::find_indirect`]), or `None`.
     #[inline]
     fn precomputed_indirect(
         &self,

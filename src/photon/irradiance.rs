@@ -10,7 +10,6 @@
 //! ray costs one lookup and no shadow ray (Christensen's global map holds direct light for the
 //! same reason; here it is computed at each site with shadow rays, since the first photon hits
 //! are not stored).
-
 //!
 //! The values are estimated on demand, a block of neighbouring sites at a time, when a lookup
 //! first reads one of the block's sites: a view sees part of the scene, and the sites it never
@@ -320,6 +319,10 @@ impl PrecomputedIrradiance {
 
     /// The lookups, with what the values are estimated from (the maps the sites were made for).
     pub fn sites<'c>(&'c self, source: SiteSource<'c>) -> Sites<'c> {
+        assert!(
+            source.direct.is_none() || self.errors.len() == self.in_tree.len(),
+            "direct light at sites indexed without their error bounds"
+        );
         Sites { cache: self, source }
     }
 
@@ -334,10 +337,6 @@ impl PrecomputedIrradiance {
         let start = std::time::Instant::now();
         let first = b * SITE_BLOCK;
         let in_block = &self.in_tree[first..(first + SITE_BLOCK).min(self.in_tree.len())];
-        assert!(
-            source.direct.is_none() || !self.errors.is_empty(),
-            "direct light at sites indexed without their error bounds"
-        );
         let mut scratch: Vec<Neighbor> = Vec::new();
         // Consecutive sites are near each other: each map's search starts from the last one's
         // radius.
@@ -391,7 +390,8 @@ impl PrecomputedIrradiance {
         self.tree.is_empty()
     }
 
-    /// Memory held: the index, the sites' points and the values estimated so far.
+    /// Memory held: the index, the Morton order, the error bounds kept and the values
+    /// estimated so far.
     pub fn bytes(&self) -> usize {
         let estimated = self.estimated.load(Ordering::Relaxed) as usize;
         self.tree.bytes()
