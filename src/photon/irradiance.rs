@@ -13,8 +13,8 @@
 //!
 //! The values are estimated on demand, a block of neighbouring sites at a time, when a lookup
 //! first reads one of the block's sites: a view sees part of the scene, and the sites it never
-//! reads are never estimated (on the default scenes the camera reads 14 % of the doorway's
-//! sites, 69 % of the Cornell box's). A block's values depend only on its sites and the maps,
+//! reads are never estimated (on the default renders 19 % of the doorway's sites are
+//! estimated, 78 % of the Cornell box's: `--stats`, `irradiance_cache`). A block's values depend only on its sites and the maps,
 //! so they are the same whichever thread estimates them and whenever.
 
 use super::kdtree::{KdPoint, KdTree, Neighbor};
