@@ -174,6 +174,8 @@ pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
 pub struct Distribution1D {
     func: Vec<f32>,
     cdf: Vec<f32>,
+    /// `func[i] / total`, rounded once from `f64` (kept: a light sample reads it twice).
+    pmf: Vec<f32>,
     total: f64,
 }
 
@@ -190,7 +192,8 @@ impl Distribution1D {
             prefix.push(sum);
         }
         let cdf = prefix.iter().map(|&c| if sum > 0.0 { (c / sum) as f32 } else { 0.0 }).collect();
-        Distribution1D { func, cdf, total: sum }
+        let pmf = func.iter().map(|&w| if sum > 0.0 { (w as f64 / sum) as f32 } else { 0.0 }).collect();
+        Distribution1D { func, cdf, pmf, total: sum }
     }
 
     /// Number of entries.
@@ -210,15 +213,13 @@ impl Distribution1D {
 
     /// Probability of picking index `i` (zero out of range).
     pub fn pmf(&self, i: usize) -> f32 {
-        match self.func.get(i) {
-            Some(&w) if self.total > 0.0 => (w as f64 / self.total) as f32,
-            _ => 0.0,
-        }
+        self.pmf.get(i).copied().unwrap_or(0.0)
     }
 
     /// Picks an index; returns `(index, pmf, u_remapped)` where `u_remapped` is `u` rescaled to
     /// `[0, 1)` within the chosen entry's CDF interval (reusable as a fresh uniform). `None` when
     /// all weights are zero.
+    #[inline]
     pub fn sample(&self, u: f32) -> Option<(usize, f32, f32)> {
         if self.total <= 0.0 {
             return None;
@@ -228,7 +229,7 @@ impl Distribution1D {
         let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(self.func.len() - 1);
         let (lo, hi) = (self.cdf[i], self.cdf[i + 1]);
         let u_remapped = if hi > lo { ((u - lo) / (hi - lo)).clamp(0.0, ONE_MINUS_EPSILON) } else { 0.0 };
-        Some((i, self.pmf(i), u_remapped))
+        Some((i, self.pmf[i], u_remapped))
     }
 }
 

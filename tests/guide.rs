@@ -1,11 +1,14 @@
 //! Guided photon emission (`photon::guide`): in a room lit by the sun through a window, the
 //! photons are sent where the camera looks, many more of them are seen, and the image keeps
 //! its value (each photon's power is divided by the density of its sample); the same with the
-//! window declared a portal (`[[portal]]`).
+//! window declared a portal (`[[portal]]`), and with the window found as one where none is
+//! declared.
 
 use crate::common;
+use photonmap::accel::bvh::Bvh;
 use photonmap::config::{IntegratorKind, RenderSettings};
 use photonmap::geometry::Vec3;
+use photonmap::integrator::openings;
 use photonmap::light::{LightDesc, Portal};
 use photonmap::scene::Scene;
 use photonmap::tools::stress::scenes::{camera, diffuse, Builder};
@@ -16,6 +19,11 @@ use crate::common::render_checked;
 /// on a ground of half-width 10, lit by a sun travelling in through the window; the camera
 /// stands inside, looking at the floor and the back wall.
 fn sunroom(w: f32) -> Scene {
+    sunroom_seen_from(w, Vec3::new(0.0, 1.0, 0.9), Vec3::new(0.0, 0.4, -0.6))
+}
+
+/// [`sunroom`] seen from `eye`, looking at `target`.
+fn sunroom_seen_from(w: f32, eye: Vec3, target: Vec3) -> Scene {
     let mut b = Builder::default();
     let wall = b.material("wall", diffuse(0.7));
     let ground = b.material("ground", diffuse(0.3));
@@ -42,13 +50,15 @@ fn sunroom(w: f32) -> Scene {
         ground,
     );
     b.light(LightDesc::Distant { direction: Vec3::new(0.0, -0.6, -1.0), irradiance: Vec3::splat(5.0) });
-    b.build("sunroom", camera(v(0.0, 1.0, 0.9), v(0.0, 0.4, -0.6), Vec3::Y, 80.0))
+    b.build("sunroom", camera(eye, target, Vec3::Y, 80.0))
 }
 
+/// Guided or not, without portals (none declared, none looked for).
 fn settings(guide: bool, passes: u32) -> RenderSettings {
     RenderSettings {
         integrator: Some(IntegratorKind::Sppm),
         photon_guide: Some(guide),
+        portals: Some(false),
         passes: Some(passes),
         photons: Some(50_000),
         spp: Some(2),
@@ -167,4 +177,52 @@ fn a_portal_anywhere_keeps_the_image() {
     eprintln!("mean with the portal {mw:.5}, without {mo:.5}, reference {r:.5}");
     assert!((mw / r - 1.0).abs() < 0.01, "with the portal {mw} against {r}");
     assert!((mw / mo - 1.0).abs() < 0.01, "with the portal {mw} against {mo} without");
+}
+
+#[test]
+fn an_undeclared_window_is_found_and_keeps_the_image() {
+    // The sunroom with no portal declared: the rays from what the camera sees that leave the
+    // scene all went out through the window, whose wall they cross inside it. The portal found
+    // lies in the window (in the thin wall's plane, within its edges) and covers most of it.
+    let w = 0.3;
+    let scene = sunroom(w);
+    let bvh = Bvh::build(&scene.mesh);
+    let found = openings::find(&scene, &bvh, &scene.camera);
+    assert_eq!(found.portals.len(), 1, "{}", found.reason);
+    let p = found.portals[0];
+    let corners = [p.corner, p.corner + p.edge_u, p.corner + p.edge_v, p.corner + p.edge_u + p.edge_v];
+    for c in corners {
+        assert!((c.z - 1.0).abs() < 1e-4, "{c} off the wall's plane");
+        assert!(c.x.abs() <= w && (c.y - 1.0).abs() <= w, "{c} outside the window");
+        assert!(c.x.abs() > 0.999 * w && (c.y - 1.0).abs() > 0.999 * w, "{c} short of the window's corner");
+    }
+    let area = p.edge_u.cross(p.edge_v).length();
+    assert!(area > 0.6 * (2.0 * w) * (2.0 * w), "{area} of the window's {}", 4.0 * w * w);
+    // Rendered with it, the photons reach the room as with a declared portal, and the image
+    // keeps its value.
+    let with = render_checked(&scene, &RenderSettings { portals: Some(true), ..settings(false, 128) }, 16);
+    let plain = render_checked(&scene, &settings(false, 1), 16);
+    let stage = with.stats.stages.iter().find(|s| s.name == "portals.found").unwrap();
+    assert!(stage.reason.contains("1 openings found"), "{stage:?}");
+    assert!(!plain.stats.stages.iter().any(|s| s.name == "portals.found"));
+    let (ew, ep) = (efficiency(&with), efficiency(&plain));
+    assert!(ew > 30.0 * ep, "efficiency with the portal found {ew} vs without {ep}");
+    let (mw, mp) = (with.film.mean(), path_mean(&scene));
+    assert!((mw / mp - 1.0).abs() < 0.02, "mean with the portal found {mw} vs path tracer {mp}");
+}
+
+#[test]
+fn no_opening_is_looked_for_outdoors_or_where_nothing_leaves() {
+    // Seen from outside, most rays from what the camera sees leave the scene: no enclosure.
+    let outdoors = sunroom_seen_from(0.3, Vec3::new(0.0, 1.5, 6.0), Vec3::new(0.0, 1.0, 0.0));
+    let found = openings::find(&outdoors, &Bvh::build(&outdoors.mesh), &outdoors.camera);
+    assert!(found.portals.is_empty() && found.reason.contains("not an enclosure"), "{}", found.reason);
+    // A window too small to matter lets no ray out: nothing found, and nothing changed.
+    let closed = sunroom(0.0005);
+    let found = openings::find(&closed, &Bvh::build(&closed.mesh), &closed.camera);
+    assert!(found.portals.is_empty() && found.reason.contains("no opening"), "{}", found.reason);
+    // No sun, no search.
+    let cornell = common::scene("cornell");
+    let found = openings::find(&cornell, &Bvh::build(&cornell.mesh), &cornell.camera);
+    assert!(found.portals.is_empty() && found.reason.contains("no distant light"), "{}", found.reason);
 }

@@ -7,6 +7,7 @@
 //! [`frame`](crate::frame).
 
 pub mod maps;
+pub mod openings;
 pub mod passes;
 pub mod path;
 pub mod photon;
@@ -131,8 +132,26 @@ impl<'s> Prepared<'s> {
             AnyAccel::build(cfg.accel, &scene.mesh, scene.cutouts().as_ref(), options)
         })?;
         stats.accel = accel.name().to_string();
+        // Where the scene declares no portal, the openings a sun shines in through.
+        let found = if cfg.portals && scene.portals.is_empty() && scene.has_distant_light() {
+            let found = stats.run("portals.found", "", |stats| {
+                let found = crate::dispatch!(&accel, a => openings::find(&scene, a, &scene.camera));
+                stats.rays.photon += found.rays;
+                found
+            });
+            if let Some(stage) = stats.stages.last_mut() {
+                stage.reason = found.reason.clone();
+            }
+            found.portals
+        } else {
+            Vec::new()
+        };
         let lights = stats.run("lights", "prepare emitters and light sampling", |_| {
-            let portals = if cfg.portals { &scene.portals[..] } else { &[] };
+            let portals = match cfg.portals {
+                false => &[][..],
+                true if scene.portals.is_empty() => &found[..],
+                true => &scene.portals[..],
+            };
             let maps = scene.emission_maps();
             let emission = maps.as_deref().map(|maps| EmissionTextures {
                 uvs: &scene.attributes.uvs,

@@ -290,6 +290,11 @@ impl Scene {
         Some(s)
     }
 
+    /// Whether a distant light (a sun) lights the scene.
+    pub fn has_distant_light(&self) -> bool {
+        self.lights.iter().any(|l| matches!(l, LightDesc::Distant { .. }))
+    }
+
     /// The material of triangle `prim`, untextured (its kind and constants as the files give
     /// them).
     #[inline]
