@@ -68,15 +68,31 @@ pub fn offset_distance(p: Vec3, err: Vec3, n: Vec3) -> f32 {
 #[inline]
 pub fn offset_ray_origin(p: Vec3, err: Vec3, n: Vec3) -> Vec3 {
     let offset = offset_distance(p, err, n) * n;
-    let mut po = p + offset;
-    for i in 0..3 {
-        if offset[i] > 0.0 {
-            po[i] = next_float_up(po[i]);
-        } else if offset[i] < 0.0 {
-            po[i] = next_float_down(po[i]);
-        }
+    let po = p + offset;
+    Vec3::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
+}
+
+/// `v` moved one float up where `dir > 0` ([`next_float_up`]), down where `dir < 0`
+/// ([`next_float_down`]), and left where `dir` is zero or NaN: the same floats, chosen by
+/// selects instead of branches (the sign of a normal's coordinate, which picks the way, is
+/// anyone's guess from one hit to the next).
+#[inline(always)]
+fn away(v: f32, dir: f32) -> f32 {
+    let down = dir < 0.0;
+    // Down is up from the negation, negated back.
+    let w = if down { -v } else { v };
+    let b = w.to_bits();
+    // -0 goes up as +0 does.
+    let b = if b == 0x8000_0000 { 0 } else { b };
+    let stepped = if b >> 31 == 0 { b.wrapping_add(1) } else { b.wrapping_sub(1) };
+    let kept = w.is_nan() || w == f32::INFINITY;
+    let up = f32::from_bits(if kept { w.to_bits() } else { stepped });
+    let moved = if down { -up } else { up };
+    if down || dir > 0.0 {
+        moved
+    } else {
+        v
     }
-    po
 }
 
 /// The smallest float greater than `v` (infinity and NaN unchanged; -0 goes to the smallest
@@ -121,6 +137,43 @@ mod tests {
                         );
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn moving_away_is_next_float_up_or_down() {
+        let mut specials = vec![0.0f32, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::NAN, f32::MAX, f32::MIN];
+        specials.extend([
+            f32::MIN_POSITIVE,
+            -f32::MIN_POSITIVE,
+            f32::from_bits(1),
+            -f32::from_bits(1),
+            1.0,
+            -1.0,
+        ]);
+        let mut x = 0x2545_F491u32;
+        let mut values = specials.clone();
+        for _ in 0..100_000 {
+            x ^= x << 13;
+            x ^= x >> 17;
+            x ^= x << 5;
+            values.push(f32::from_bits(x));
+        }
+        for &v in &values {
+            for dir in [1.0f32, -1.0, 0.0, -0.0, 1e-30, -1e-30, f32::NAN] {
+                let want = if dir > 0.0 {
+                    next_float_up(v)
+                } else if dir < 0.0 {
+                    next_float_down(v)
+                } else {
+                    v
+                };
+                let got = away(v, dir);
+                assert!(
+                    got.to_bits() == want.to_bits() || got.is_nan() && want.is_nan(),
+                    "{v:e} {dir}: {got:e} {want:e}"
+                );
             }
         }
     }

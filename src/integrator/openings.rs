@@ -35,16 +35,19 @@
 //!    in again as its own photons, whose power varies with the few directions that see the
 //!    sunlit sill: on the sunroom (a 15 cm wall) that made the images noisier than no portal.
 //!
+//! The search looks through glass: a window's pane is part of its opening.
+//!
 //! The portal only changes where photons go: every light path is counted once whatever the
 //! portal is ([`crate::photon::portal`]), so a portal that misses part of an opening costs
 //! noise, not bias. The search depends on the scene and its first camera only (a fixed seed),
 //! so parts of a render made on other machines find the same portals.
 
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::frame::SurfaceHit;
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::light::{LightDesc, Portal};
-use crate::material::face_forward;
+
+use crate::material::{face_forward, Material};
 use crate::sampling::{sample_cosine_hemisphere, Frame as Basis};
 use crate::scene::{Camera, Scene};
 use glam::{Vec2, Vec3};
@@ -72,6 +75,38 @@ pub struct Found {
     pub portals: Vec<Portal>,
     pub reason: String,
     pub rays: u64,
+}
+
+/// The rays of the search, which look through glass: a window's pane is part of its opening
+/// (the sun's photons and the light off the ground come in through it), so a ray through it
+/// has left, and a rectangle across it lies in the open.
+struct Caster<'a, A: Accel> {
+    scene: &'a Scene,
+    accel: &'a A,
+}
+
+impl<A: Accel> Caster<'_, A> {
+    /// The first hit along `ray` on a surface that is not glass (at most 8 panes passed).
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let mut r = *ray;
+        for _ in 0..8 {
+            let h = self.accel.intersect(&r)?;
+            if !matches!(self.scene.material(h.prim), Material::Glass { .. }) {
+                return Some(h);
+            }
+            // Just past the pane (a few ulps of the distance and of the coordinates).
+            r.t_min = h.t + (h.t + r.origin.abs().max_element()) * 1e-5;
+            if !(r.t_min < r.t_max) {
+                return None;
+            }
+        }
+        None
+    }
+
+    /// Whether something that is not glass lies along `ray`.
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.intersect(ray).is_some()
+    }
 }
 
 /// A ray from a seen surface that met nothing.
@@ -109,6 +144,8 @@ pub fn find<A: Accel>(scene: &Scene, accel: &A, camera: &Camera) -> Found {
         return Found { reason: "no distant light".into(), ..Found::default() };
     }
     let mut rays = 0u64;
+    let caster = Caster { scene, accel };
+    let accel = &caster;
     let (escapes, cast) = escapes(scene, accel, camera, &suns, &mut rays);
     let open = escapes.len() as f32 / cast.max(1) as f32;
     if escapes.len() < MIN_CROSSINGS {
@@ -162,7 +199,7 @@ pub fn find<A: Accel>(scene: &Scene, accel: &A, camera: &Camera) -> Found {
 /// random directions that meet nothing, and how many were cast.
 fn escapes<A: Accel>(
     scene: &Scene,
-    accel: &A,
+    accel: &Caster<'_, A>,
     camera: &Camera,
     suns: &[Vec3],
     rays: &mut u64,
@@ -200,7 +237,7 @@ fn escapes<A: Accel>(
 
 /// Where the ray `e` crossed the inside face of the wall around its opening (see [`wall`]);
 /// `None` if none was found.
-fn crossing<A: Accel>(scene: &Scene, accel: &A, e: &Escape, rays: &mut u64) -> Option<Crossing> {
+fn crossing<A: Accel>(scene: &Scene, accel: &Caster<'_, A>, e: &Escape, rays: &mut u64) -> Option<Crossing> {
     let (t, normal, offset, rim) = wall(scene, accel, e.origin, e.dir, &RIM_ANGLES, rays)?;
     Some(Crossing { normal, offset, at: e.origin + t * e.dir, rim })
 }
@@ -213,7 +250,7 @@ fn crossing<A: Accel>(scene: &Scene, accel: &A, e: &Escape, rays: &mut u64) -> O
 /// offset, and the distance in the plane from the crossing to the nearest surface met.
 fn wall<A: Accel>(
     scene: &Scene,
-    accel: &A,
+    accel: &Caster<'_, A>,
     from: Vec3,
     dir: Vec3,
     angles: &[f32],
@@ -302,7 +339,7 @@ fn openings(crossings: &[Crossing]) -> Vec<Vec<Crossing>> {
 /// direction of their hull's edges and of the world's axes, then moved out through the wall
 /// ([`through_the_wall`]) onto its outside face and fitted to the edges there; `None` if no
 /// rectangle lies in the open.
-fn portal<A: Accel>(accel: &A, group: &[Crossing], rays: &mut u64) -> Option<Portal> {
+fn portal<A: Accel>(accel: &Caster<'_, A>, group: &[Crossing], rays: &mut u64) -> Option<Portal> {
     let normal = group.iter().map(|c| c.normal).sum::<Vec3>().try_normalize()?;
     let offset = group.iter().map(|c| c.offset).sum::<f32>() / group.len() as f32;
     let (u, v) = normal.any_orthonormal_pair();
@@ -366,7 +403,12 @@ fn portal<A: Accel>(accel: &A, group: &[Crossing], rays: &mut u64) -> Option<Por
 /// The plane of the wall's outside face around `rect` (moved out through the wall to near
 /// it): rays from points beyond its edges, well outside, back toward the wall meet the face;
 /// `None` unless most of them meet it in one plane.
-fn outside_face<A: Accel>(accel: &A, plane: &Plane, rect: &Rect, rays: &mut u64) -> Option<Plane> {
+fn outside_face<A: Accel>(
+    accel: &Caster<'_, A>,
+    plane: &Plane,
+    rect: &Rect,
+    rays: &mut u64,
+) -> Option<Plane> {
     let size = rect.size();
     let margin = 0.1 * size / (rect.hi - rect.lo).max(Vec2::splat(f32::MIN_POSITIVE));
     let mut offsets: Vec<f32> = (0..20)
@@ -401,7 +443,7 @@ fn outside_face<A: Accel>(accel: &A, plane: &Plane, rect: &Rect, rays: &mut u64)
 /// position, to a ten-thousandth of the rectangle's size, at which the side's points are in
 /// the open, searched out (or in) a twentieth of the size at a time, then by bisection, and
 /// moved back by twice that.
-fn edges<A: Accel>(accel: &A, plane: &Plane, rect: Rect, rays: &mut u64) -> Rect {
+fn edges<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: Rect, rays: &mut u64) -> Rect {
     let size = rect.size();
     let span = |k: usize| 0.005 + 0.99 * k as f32 / (CHECKS - 1) as f32;
     let mut r = rect;
@@ -510,7 +552,14 @@ impl Rect {
 /// out, a twentieth of its size at a time, while its new edge stays in the open: the crossings
 /// seldom fill an opening (rays crossing near its edges tend to meet its sides). `None` if it
 /// never lies in the open.
-fn fit<A: Accel>(accel: &A, plane: &Plane, axis: Vec2, lo: Vec2, hi: Vec2, rays: &mut u64) -> Option<Rect> {
+fn fit<A: Accel>(
+    accel: &Caster<'_, A>,
+    plane: &Plane,
+    axis: Vec2,
+    lo: Vec2,
+    hi: Vec2,
+    rays: &mut u64,
+) -> Option<Rect> {
     let size = (hi - lo).max_element();
     if !(size > 0.0) {
         return None;
@@ -559,7 +608,7 @@ fn fit<A: Accel>(accel: &A, plane: &Plane, axis: Vec2, lo: Vec2, hi: Vec2, rays:
 /// rays) and the wall still stands around it (at least 15 of 20 points a tenth of its size
 /// beyond its edges are hidden from its centre: they lie inside the wall). On a wall of no
 /// thickness, nowhere.
-fn through_the_wall<A: Accel>(accel: &A, plane: &Plane, rect: &Rect, rays: &mut u64) -> f32 {
+fn through_the_wall<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: &Rect, rays: &mut u64) -> f32 {
     let shift = |q: Vec3, by: f32| q - plane.normal * by;
     let step = 0.02 * rect.size();
     let grid = |k: usize| 0.1 + 0.2 * k as f32;
@@ -600,7 +649,7 @@ fn through_the_wall<A: Accel>(accel: &A, plane: &Plane, rect: &Rect, rays: &mut 
 
 /// Whether short rays across the plane of unit normal `n` at `p`, either way, meet nothing
 /// within `reach` (plus the rounding of `p`).
-fn in_the_open<A: Accel>(accel: &A, p: Vec3, n: Vec3, reach: f32, rays: &mut u64) -> bool {
+fn in_the_open<A: Accel>(accel: &Caster<'_, A>, p: Vec3, n: Vec3, reach: f32, rays: &mut u64) -> bool {
     [n, -n].iter().all(|&side| {
         let start = offset_ray_origin(p, Vec3::ZERO, -side) - reach * side;
         *rays += 1;
