@@ -63,6 +63,7 @@ impl TriangleMesh {
     }
 
     /// Unit geometric normal, or `None` for a degenerate triangle (zero or non-finite area).
+    #[inline]
     pub fn normal(&self, i: u32) -> Option<Vec3> {
         let n = self.normal_unnormalized(i);
         let len = n.length();

@@ -435,6 +435,7 @@ impl AreaLights {
     /// cosine at the light): far from the origin the rounding of the point is larger than any
     /// fixed fraction of `dist`, and a shadow ray stopping only a fraction short would hit the
     /// emitter itself (the furnace moved by 1e5 lost 11 % of its direct light that way).
+    #[inline]
     pub fn sample_li(&self, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
         let (i, pmf, u0) = self.distribution.sample(u[0])?;
         let tri = &self.triangles[i];

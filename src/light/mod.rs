@@ -184,6 +184,7 @@ impl Light {
     }
 
     /// Samples incident light at `p` (`u` is only used by area lights).
+    #[inline]
     pub fn sample_li(&self, p: Vec3, u: [f32; 2]) -> Option<LightSample> {
         match self {
             Light::Point(l) => l.sample_li(p),
