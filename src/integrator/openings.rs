@@ -221,7 +221,7 @@ fn escapes<A: Accel>(
             let basis = Basis::from_z(n);
             let random =
                 (0..RANDOM_RAYS).map(|_| basis.from_local(sample_cosine_hemisphere([rng.gen(), rng.gen()])));
-            for d in suns.iter().copied().filter(|s| s.dot(n) > 0.0).chain(random.collect::<Vec<_>>()) {
+            for d in suns.iter().copied().filter(|s| s.dot(n) > 0.0).chain(random) {
                 let d = d.normalize();
                 let r = Ray::new(hit.spawn(d), d);
                 cast += 1;
@@ -235,33 +235,19 @@ fn escapes<A: Accel>(
     (out, cast)
 }
 
-/// Where the ray `e` crossed the inside face of the wall around its opening (see [`wall`]);
-/// `None` if none was found.
+/// Where the ray `e` crossed the inside face of the wall around its opening: rays turned off
+/// it by [`RIM_ANGLES`] (the smallest that meets something) in [`RIM_DIRECTIONS`] directions
+/// meet the surfaces around the opening; of those that face back toward its start (within 60
+/// degrees), whose plane it crosses near where they were met (not a roof or a ground far off),
+/// the plane it crosses first. `None` if none qualifies.
 fn crossing<A: Accel>(scene: &Scene, accel: &Caster<'_, A>, e: &Escape, rays: &mut u64) -> Option<Crossing> {
-    let (t, normal, offset, rim) = wall(scene, accel, e.origin, e.dir, &RIM_ANGLES, rays)?;
-    Some(Crossing { normal, offset, at: e.origin + t * e.dir, rim })
-}
-
-/// The wall the ray from `from` along `dir` (unit) crosses through an opening: rays turned off
-/// it by `angles` (increasing) in [`RIM_DIRECTIONS`] directions meet the surfaces around the
-/// opening; of those that face back toward `from` (within 60 degrees), whose plane the ray
-/// crosses near where they were met (not a roof or a ground far off), the plane it crosses
-/// first. Returns the distance along the ray, the plane's unit normal (toward `from`) and
-/// offset, and the distance in the plane from the crossing to the nearest surface met.
-fn wall<A: Accel>(
-    scene: &Scene,
-    accel: &Caster<'_, A>,
-    from: Vec3,
-    dir: Vec3,
-    angles: &[f32],
-    rays: &mut u64,
-) -> Option<(f32, Vec3, f32, f32)> {
+    let (from, dir) = (e.origin, e.dir);
     let (t1, t2) = dir.any_orthonormal_pair();
     let mut rims: Vec<(Vec3, Vec3)> = Vec::new();
     for k in 0..RIM_DIRECTIONS {
         let (s, c) = (std::f32::consts::TAU * k as f32 / RIM_DIRECTIONS as f32).sin_cos();
         let side = c * t1 + s * t2;
-        for &a in angles {
+        for a in RIM_ANGLES {
             let d = (dir + a * side).normalize();
             *rays += 1;
             let Some(h) = accel.intersect(&Ray::new(from, d)) else { continue };
@@ -297,7 +283,7 @@ fn wall<A: Accel>(
             (q - at).length()
         })
         .fold(f32::INFINITY, f32::min);
-    (rim.is_finite() && rim > 0.0).then_some((t, normal, offset, rim))
+    (rim.is_finite() && rim > 0.0).then_some(Crossing { normal, offset, at, rim })
 }
 
 /// The crossings grouped by opening: the same wall plane, and chained by neighbours nearer
@@ -410,17 +396,9 @@ fn outside_face<A: Accel>(
     rays: &mut u64,
 ) -> Option<Plane> {
     let size = rect.size();
-    let margin = 0.1 * size / (rect.hi - rect.lo).max(Vec2::splat(f32::MIN_POSITIVE));
     let mut offsets: Vec<f32> = (0..20)
         .filter_map(|k| {
-            let t = 0.1 + 0.2 * (k % 5) as f32;
-            let (s, u) = match k / 5 {
-                0 => (-margin.x, t),
-                1 => (1.0 + margin.x, t),
-                2 => (t, -margin.y),
-                _ => (t, 1.0 + margin.y),
-            };
-            let start = rect.at(plane, s, u) - plane.normal * (0.2 * size);
+            let start = rect.beyond(plane, k) - plane.normal * (0.2 * size);
             *rays += 1;
             let h = accel.intersect(&Ray::segment(start, plane.normal, 0.0, 0.4 * size))?;
             Some(plane.normal.dot(start + h.t * plane.normal))
@@ -445,34 +423,15 @@ fn outside_face<A: Accel>(
 /// moved back by twice that.
 fn edges<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: Rect, rays: &mut u64) -> Rect {
     let size = rect.size();
-    let span = |k: usize| 0.005 + 0.99 * k as f32 / (CHECKS - 1) as f32;
     let mut r = rect;
     for side in 0..4 {
         // The side at `x`: its points in the open?
         let mut open = |r: &Rect, x: f32| {
-            let mut m = *r;
-            match side {
-                0 => m.lo.x = x,
-                1 => m.hi.x = x,
-                2 => m.lo.y = x,
-                _ => m.hi.y = x,
-            }
-            (0..CHECKS).all(|k| {
-                let p = match side {
-                    0 => m.at(plane, 0.0, span(k)),
-                    1 => m.at(plane, 1.0, span(k)),
-                    2 => m.at(plane, span(k), 0.0),
-                    _ => m.at(plane, span(k), 1.0),
-                };
-                in_the_open(accel, p, plane.normal, 1e-3 * size, rays)
-            })
+            let m = r.with_side(side, x);
+            (0..CHECKS)
+                .all(|k| in_the_open(accel, m.on_side(plane, side, span(k)), plane.normal, 1e-3 * size, rays))
         };
-        let (now, outward) = match side {
-            0 => (r.lo.x, -1.0),
-            1 => (r.hi.x, 1.0),
-            2 => (r.lo.y, -1.0),
-            _ => (r.hi.y, 1.0),
-        };
+        let (now, outward) = r.side(side);
         let step = 0.05 * size * outward;
         // A bracket: `good` in the open, `bad` not.
         let (mut good, mut bad) = (None, None);
@@ -506,13 +465,7 @@ fn edges<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: Rect, rays: &mut 
         }
         // Back by twice the search's precision: the points tested along the side cannot
         // see the wall's edge closer than that.
-        let g = g - 2e-4 * size * outward;
-        match side {
-            0 => r.lo.x = g,
-            1 => r.hi.x = g,
-            2 => r.lo.y = g,
-            _ => r.hi.y = g,
-        }
+        r = r.with_side(side, g - 2e-4 * size * outward);
     }
     r
 }
@@ -545,6 +498,55 @@ impl Rect {
     fn size(&self) -> f32 {
         (self.hi - self.lo).max_element()
     }
+
+    /// Where side `side` (0, 1: low and high `x`; 2, 3: low and high `y`) lies, and the sign
+    /// that moves it outward.
+    fn side(&self, side: usize) -> (f32, f32) {
+        match side {
+            0 => (self.lo.x, -1.0),
+            1 => (self.hi.x, 1.0),
+            2 => (self.lo.y, -1.0),
+            _ => (self.hi.y, 1.0),
+        }
+    }
+
+    /// The rectangle with side `side` moved to `x`.
+    fn with_side(mut self, side: usize, x: f32) -> Rect {
+        match side {
+            0 => self.lo.x = x,
+            1 => self.hi.x = x,
+            2 => self.lo.y = x,
+            _ => self.hi.y = x,
+        }
+        self
+    }
+
+    /// The point at fraction `t` along side `side`.
+    fn on_side(&self, plane: &Plane, side: usize, t: f32) -> Vec3 {
+        match side {
+            0 => self.at(plane, 0.0, t),
+            1 => self.at(plane, 1.0, t),
+            2 => self.at(plane, t, 0.0),
+            _ => self.at(plane, t, 1.0),
+        }
+    }
+
+    /// Point `k` (of 20: five a side) a tenth of the rectangle's size beyond its edges.
+    fn beyond(&self, plane: &Plane, k: usize) -> Vec3 {
+        let margin = 0.1 * self.size() / (self.hi - self.lo).max(Vec2::splat(f32::MIN_POSITIVE));
+        let t = 0.1 + 0.2 * (k % 5) as f32;
+        match k / 5 {
+            0 => self.at(plane, -margin.x, t),
+            1 => self.at(plane, 1.0 + margin.x, t),
+            2 => self.at(plane, t, -margin.y),
+            _ => self.at(plane, t, 1.0 + margin.y),
+        }
+    }
+}
+
+/// Test point `k` of [`CHECKS`] along a side (or a row), just inside its ends.
+fn span(k: usize) -> f32 {
+    0.005 + 0.99 * k as f32 / (CHECKS - 1) as f32
 }
 
 /// The rectangle `[lo, hi]` along `axis`, checked to lie in the open (9 × 9 points, shrunk
@@ -564,7 +566,6 @@ fn fit<A: Accel>(
     if !(size > 0.0) {
         return None;
     }
-    let span = |k: usize| 0.005 + 0.99 * k as f32 / (CHECKS - 1) as f32;
     let mut open = |p: Vec3| in_the_open(accel, p, plane.normal, 1e-3 * size, rays);
     let (centre, half) = (0.5 * (lo + hi), 0.5 * (hi - lo));
     let mut shrink = 1.0;
@@ -581,20 +582,9 @@ fn fit<A: Accel>(
     let step = 0.05 * size;
     for side in 0..4 {
         for _ in 0..20 {
-            let mut r = rect;
-            match side {
-                0 => r.lo.x -= step,
-                1 => r.hi.x += step,
-                2 => r.lo.y -= step,
-                _ => r.hi.y += step,
-            }
-            let edge = |k: usize| match side {
-                0 => r.at(plane, 0.0, span(k)),
-                1 => r.at(plane, 1.0, span(k)),
-                2 => r.at(plane, span(k), 0.0),
-                _ => r.at(plane, span(k), 1.0),
-            };
-            if !(0..CHECKS).all(|k| open(edge(k))) {
+            let (x, outward) = rect.side(side);
+            let r = rect.with_side(side, x + outward * step);
+            if !(0..CHECKS).all(|k| open(r.on_side(plane, side, span(k)))) {
                 break;
             }
             rect = r;
@@ -612,7 +602,6 @@ fn through_the_wall<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: &Rect,
     let shift = |q: Vec3, by: f32| q - plane.normal * by;
     let step = 0.02 * rect.size();
     let grid = |k: usize| 0.1 + 0.2 * k as f32;
-    let margin = 0.1 * rect.size() / (rect.hi - rect.lo).max(Vec2::splat(f32::MIN_POSITIVE));
     let mut out = 0.0f32;
     for _ in 0..200 {
         let next = out + step;
@@ -627,14 +616,7 @@ fn through_the_wall<A: Accel>(accel: &Caster<'_, A>, plane: &Plane, rect: &Rect,
         let centre = shift(rect.at(plane, 0.5, 0.5), next);
         let walled = (0..20)
             .filter(|&k| {
-                let t = grid(k % 5);
-                let (s, u) = match k / 5 {
-                    0 => (-margin.x, t),
-                    1 => (1.0 + margin.x, t),
-                    2 => (t, -margin.y),
-                    _ => (t, 1.0 + margin.y),
-                };
-                let d = shift(rect.at(plane, s, u), next) - centre;
+                let d = shift(rect.beyond(plane, k), next) - centre;
                 *rays += 1;
                 accel.occluded(&Ray::segment(centre, d.normalize(), 0.0, d.length()))
             })
