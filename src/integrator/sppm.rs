@@ -45,7 +45,7 @@ use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::{offset_ray_origin, Ray};
 use crate::material::face_forward;
 use crate::photon::kdtree::Neighbor;
-use crate::photon::map::PhotonMaps;
+use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
 use crate::stats::Stats;
 use glam::{Vec2, Vec3};
 use rand::Rng;
@@ -105,7 +105,8 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                 |x, y, st, rng, scratch: &mut Scratch, c| {
                     let l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     if let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) {
-                        gather(frame, &maps, gathers, st, &v, cfg.alpha, &mut scratch.neighbors, rng, c);
+                        let nearest = &mut scratch.nearest;
+                        gather(frame, &maps, gathers, (x, y), st, &v, cfg.alpha, nearest, rng, c);
                     }
                     l
                 },
@@ -136,7 +137,22 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
 #[derive(Default)]
 pub(super) struct Scratch {
     pub(super) batch: CameraBatch,
-    pub(super) neighbors: Vec<Neighbor>,
+    pub(super) nearest: Nearest,
+}
+
+/// The `k` nearest photons of each map (the indirect maps, then the caustic ones) around the
+/// last visible point, as [`first_radius2`] found them, and where the next pixel's searches
+/// start. A pass-indexed pass gathers within a disc no wider than the first radius, so these
+/// are all the photons its gather needs ([`PhotonMap::for_each_found_inside`]).
+#[derive(Default)]
+pub(super) struct Nearest {
+    found: Vec<Vec<Neighbor>>,
+    /// Per map, the squared radius the next pixel's search tries first (0: none).
+    guesses: Vec<f32>,
+    /// The pixel whose searches left `guesses`. Only the next pixel of its row uses them, so
+    /// that what a pixel's search does depends on its row alone, not on the jobs that threads
+    /// took (the photons found are the same whatever the guess; their order is not).
+    after: Option<(u32, u32)>,
 }
 
 /// The photon maps of a progressive pass (both kinds gather at visible points, so nothing is
@@ -229,10 +245,11 @@ fn gather<A: Accel>(
     frame: &Frame<'_, A>,
     maps: &PhotonMaps,
     gathers: &GatherPair,
+    pixel: (u32, u32),
     st: &mut PixelState,
     v: &Landing,
     alpha: f32,
-    nb: &mut Vec<Neighbor>,
+    nearest: &mut Nearest,
     rng: &mut Pcg32,
     c: &mut Counters,
 ) {
@@ -241,7 +258,7 @@ fn gather<A: Accel>(
     }
     let ns = face_forward(v.hit.n, v.wo);
     if st.r2 == 0.0 {
-        match first_radius2(maps, gathers, v.hit.p, ns, nb, c) {
+        match first_radius2(maps, gathers, pixel, v.hit.p, ns, nearest, c) {
             Some(r2) => st.r2 = r2,
             None => return,
         }
@@ -265,26 +282,45 @@ fn gather<A: Accel>(
 
 /// The squared distance from `x` to the `k`-th nearest photon in the map where photons are
 /// densest (so caustics start small), bounded by the gather radius; `None` where no photon is
-/// near enough.
+/// near enough. The photons found are left in `nearest`; the search starts from the radius of
+/// the row's previous pixel (`pixel` is the one asked for).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn first_radius2(
     maps: &PhotonMaps,
     gathers: &GatherPair,
+    pixel: (u32, u32),
     x: Vec3,
     ns: Vec3,
-    nb: &mut Vec<Neighbor>,
+    nearest: &mut Nearest,
     c: &mut Counters,
 ) -> Option<f32> {
-    let kinds = [(&maps.indirect, &gathers.indirect), (&maps.caustic, &gathers.caustic)];
+    let count = maps.indirect.len() + maps.caustic.len();
+    nearest.found.resize_with(count, Vec::new);
+    nearest.guesses.resize(count, 0.0);
+    if nearest.after != Some((pixel.0.wrapping_sub(1), pixel.1)) {
+        nearest.guesses.fill(0.0);
+    }
+    nearest.after = Some(pixel);
     let mut r2 = f32::INFINITY;
     c.timed(Part::Gathers, || {
-        for (kind, params) in kinds {
-            for map in kind.iter() {
-                r2 = r2.min(map.knn_radius2(x, ns, params, nb));
-            }
+        for (i, (map, params)) in with_params(maps, gathers).enumerate() {
+            let (found, guess) = (&mut nearest.found[i], &mut nearest.guesses[i]);
+            let own = map.knn_radius2_guessed(x, ns, params, *guess, found);
+            *guess = own * GUESS_MARGIN;
+            r2 = r2.min(own);
         }
     });
-    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
+    c.queries += count as u64;
     (r2.is_finite() && r2 > 0.0).then_some(r2)
+}
+
+/// Every map of `maps` (the indirect ones, then the caustic ones) with its gather's parameters.
+fn with_params<'m>(
+    maps: &'m PhotonMaps,
+    gathers: &'m GatherPair,
+) -> impl Iterator<Item = (&'m PhotonMap, &'m GatherParams)> {
+    let indirect = maps.indirect.iter().map(|m| (m, &gathers.indirect));
+    indirect.chain(maps.caustic.iter().map(|m| (m, &gathers.caustic)))
 }
 
 /// The flux `β Σ f(wo, wi) power` of the photons of every map over the `footprint` of the
@@ -304,13 +340,16 @@ pub(super) fn flux_within(
     footprint: &Footprint,
     c: &mut Counters,
 ) -> (Vec3, u32) {
-    let (phi, _, m) = fluxes_within(maps, gathers, v, ns, footprint, None, c);
+    let (phi, _, m) = fluxes_within(maps, gathers, v, ns, footprint, None, None, c);
     (phi, m)
 }
 
 /// [`flux_within`] over `footprint` and, in the same gather, over `inner` (a footprint of the
 /// same visible point within a smaller radius, such as [`Footprint::half`]): both fluxes, each
-/// scaled to its own disc, and the photons over `footprint`.
+/// scaled to its own disc, and the photons over `footprint`. With `nearest` (what
+/// [`first_radius2`] found at this visible point) the photons are taken from there instead of
+/// searched for again.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn fluxes_within(
     maps: &PhotonMaps,
     gathers: &GatherPair,
@@ -318,30 +357,30 @@ pub(super) fn fluxes_within(
     ns: Vec3,
     footprint: &Footprint,
     inner: Option<&Footprint>,
+    nearest: Option<&Nearest>,
     c: &mut Counters,
 ) -> (Vec3, Vec3, u32) {
     let (mut phi, mut phi_inner) = (Vec3::ZERO, Vec3::ZERO);
     let inner_r2 = inner.map_or(0.0, |f| f.r2);
     let mut m = 0u32;
     c.timed(Part::Gathers, || {
-        for map in maps.indirect.iter().chain(&maps.caustic) {
-            m += map.for_each_inside(
-                v.hit.p,
-                ns,
-                footprint.r2,
-                gathers.indirect.flatten,
-                |offset, wi, power, d2| {
-                    let inside = footprint.contains(offset);
-                    if inside {
-                        let flux = v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
-                        phi += flux;
-                        if d2 < inner_r2 {
-                            phi_inner += flux;
-                        }
+        for (i, (map, params)) in with_params(maps, gathers).enumerate() {
+            let visit = |offset, wi, power, d2| {
+                let inside = footprint.contains(offset);
+                if inside {
+                    let flux = v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
+                    phi += flux;
+                    if d2 < inner_r2 {
+                        phi_inner += flux;
                     }
-                    inside
-                },
-            );
+                }
+                inside
+            };
+            let (p, r2) = (v.hit.p, footprint.r2);
+            m += match nearest {
+                Some(n) => map.for_each_found_inside(p, ns, r2, params, &n.found[i], visit),
+                None => map.for_each_inside(p, ns, r2, params.flatten, visit),
+            };
         }
     });
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;

@@ -390,19 +390,72 @@ impl PhotonMap {
     ) -> u32 {
         let mut count = 0;
         self.tree.for_each_below_with(x, r2, flattened_metric(ns, flatten), |i, d2| {
-            let p = self.tree.get(i);
-            let wi = pack::decode_dir_oct(p.dir);
-            if wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p), d2) {
-                count += 1;
-            }
+            count += self.offer(i, d2, x, ns, &mut f) as u32;
         });
         count
     }
 
+    /// [`PhotonMap::for_each_inside`] over the photons that [`PhotonMap::knn_radius2_guessed`]
+    /// found at the same `x` and `ns` with `params` (`found`, in the metric flattened by
+    /// `params.flatten`): the same photons (in another order) without searching the tree again
+    /// whenever `r2` is at most the search's squared radius, as a pass-indexed pass's disc is;
+    /// otherwise it searches.
+    #[inline]
+    pub fn for_each_found_inside(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        r2: f32,
+        params: &GatherParams,
+        found: &[Neighbor],
+        mut f: impl FnMut(Vec3, Vec3, Vec3, f32) -> bool,
+    ) -> u32 {
+        // Every photon strictly inside the farthest found is found; with fewer than `k`, every
+        // photon within the search radius was.
+        let reach = match found.first() {
+            Some(far) if found.len() == params.k => far.dist2,
+            _ => params.max_radius * params.max_radius,
+        };
+        if r2 > reach {
+            return self.for_each_inside(x, ns, r2, params.flatten, f);
+        }
+        let mut count = 0;
+        for nb in found.iter().filter(|nb| nb.dist2 < r2) {
+            count += self.offer(nb.index, nb.dist2, x, ns, &mut f) as u32;
+        }
+        count
+    }
+
+    /// Offers photon `i`, at squared distance `d2` from `x` in the gather's metric, to `f` if
+    /// it arrives from the side of `ns`: whether `f` counted it.
+    #[inline(always)]
+    fn offer(
+        &self,
+        i: u32,
+        d2: f32,
+        x: Vec3,
+        ns: Vec3,
+        f: &mut impl FnMut(Vec3, Vec3, Vec3, f32) -> bool,
+    ) -> bool {
+        let p = self.tree.get(i);
+        let wi = pack::decode_dir_oct(p.dir);
+        wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p), d2)
+    }
+
     /// Squared distance (in the flattened metric) from `x` to its `k`-th nearest photon, or
-    /// `max_radius²` when fewer than `k` lie within `max_radius`.
-    pub fn knn_radius2(&self, x: Vec3, ns: Vec3, params: &GatherParams, scratch: &mut Vec<Neighbor>) -> f32 {
-        match self.gather(x, ns, params, scratch) {
+    /// `max_radius²` when fewer than `k` lie within `max_radius`; the search is tried first
+    /// within the squared radius `guess` (0: not; a nearby query's result times
+    /// [`GUESS_MARGIN`]), and the photons it found are left in `found` for
+    /// [`PhotonMap::for_each_found_inside`]. The same radius whatever the guess.
+    pub fn knn_radius2_guessed(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        guess: f32,
+        found: &mut Vec<Neighbor>,
+    ) -> f32 {
+        match self.gather_guessed(x, ns, params, guess, found) {
             Some(r2) => r2,
             None => params.max_radius * params.max_radius,
         }
@@ -586,5 +639,57 @@ mod tests {
                 assert!(bias.abs() < 0.03, "k {k}, {kernel:?}: mean off by {:+.2}%", 100.0 * bias);
             }
         }
+    }
+
+    /// The photons a k-nearest search found serve any gather within its radius: the same
+    /// photons as the fixed-radius query, whatever the guess the search started from; beyond
+    /// its radius the query searches.
+    #[test]
+    fn found_photons_are_the_fixed_radius_query_within_their_radius() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let hits: Vec<PhotonHit> = uniform_floor(20_000, 4.0, 3)
+            .into_iter()
+            .map(|mut h| {
+                // Off the plane a little, and some arriving from below.
+                h.pos.y = 0.05 * (rng.gen::<f32>() - 0.5);
+                h.wi = Vec3::new(rng.gen::<f32>() - 0.5, rng.gen::<f32>() - 0.3, rng.gen::<f32>() - 0.5)
+                    .normalize();
+                h
+            })
+            .collect();
+        let map = PhotonMap::build(hits, MapColor::Rgb, 20_000);
+        let ns = Vec3::Y;
+        type Visit<'v> = &'v mut dyn FnMut(Vec3, Vec3, Vec3, f32) -> bool;
+        let collect = |f: &mut dyn FnMut(Visit) -> u32| {
+            let mut seen = Vec::new();
+            let n = f(&mut |offset, _, _, d2| {
+                seen.push((offset.x.to_bits(), offset.z.to_bits(), d2.to_bits()));
+                true
+            });
+            seen.sort_unstable();
+            assert_eq!(n as usize, seen.len());
+            seen
+        };
+        let (mut found, mut guessed) = (Vec::new(), Vec::new());
+        let mut compared = 0;
+        for i in 0..200 {
+            let x = Vec3::new(0.5 + 3.0 * rng.gen::<f32>(), 0.0, 0.5 + 3.0 * rng.gen::<f32>());
+            let k = [5, 30, 100][i % 3];
+            let params =
+                GatherParams { k, max_radius: [1.0, 0.05][i % 2], kernel: Kernel::Box, flatten: 8.0 };
+            let r2 = map.knn_radius2_guessed(x, ns, &params, 0.0, &mut found);
+            for guess in [1e-4, 0.01 * r2, 2.0 * r2] {
+                assert_eq!(map.knn_radius2_guessed(x, ns, &params, guess, &mut guessed), r2);
+            }
+            for scale in [1.0, 0.6, 0.05, 2.0] {
+                let q = r2 * scale;
+                let listed = collect(&mut |f| map.for_each_found_inside(x, ns, q, &params, &found, f));
+                let searched = collect(&mut |f| map.for_each_inside(x, ns, q, 8.0, f));
+                assert_eq!(listed, searched, "query {i}, k {k}, scale {scale}");
+                compared += listed.len();
+            }
+        }
+        assert!(compared > 5000, "{compared}");
     }
 }
