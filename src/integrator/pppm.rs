@@ -67,6 +67,9 @@ struct PilotPoint {
     /// The surface's unit normal on the viewer's side.
     n: Vec3,
     r2: f32,
+    /// The squared radius about `p` within which the pilot's probes found the surface whole
+    /// (`CLEAR² r2`; 0 where they found a wall or an edge).
+    clear2: f32,
 }
 
 impl PilotPoint {
@@ -77,7 +80,18 @@ impl PilotPoint {
         let same = self.r2 > 0.0 && (p - self.p).length_squared() < self.r2 && n.dot(self.n) > PILOT_COS;
         same.then_some(self.r2)
     }
+
+    /// Whether the disc of squared radius `r2` about `p` (a visible point this pilot point
+    /// serves) lies within the disc the pilot found whole: then the disc needs no probes.
+    fn clears(&self, p: Vec3, r2: f32) -> bool {
+        let reach = (p - self.p).length() + r2.sqrt();
+        reach * reach <= self.clear2
+    }
 }
+
+/// How much wider than the first radius the pilot probes the surface for walls and edges: a
+/// pass's disc, about a visible point a little off the pilot's, must fit inside.
+const CLEAR: f32 = 1.5;
 
 /// The least cosine between a visible point's normal and its pixel's pilot point's for the
 /// pilot's radius to serve it (26°).
@@ -113,7 +127,9 @@ fn pilot<A: Accel>(
                 let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) else { return Vec3::ZERO };
                 let n = face_forward(v.hit.n, v.wo);
                 if let Some(r2) = first_radius2(&maps, gathers, (x, y), v.hit.p, n, nearest, c) {
-                    *point = PilotPoint { p: v.hit.p, n, r2 };
+                    let wide = CLEAR * CLEAR * r2;
+                    let clear2 = if Footprint::clear(frame, &v.hit, n, wide, rng, c) { wide } else { 0.0 };
+                    *point = PilotPoint { p: v.hit.p, n, r2, clear2 };
                 }
                 Vec3::ZERO
             },
@@ -165,7 +181,8 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                     }
                     let ns = face_forward(v.hit.n, v.wo);
                     let nearest = &mut scratch.nearest;
-                    let own = pilot[y as usize * width + x as usize].radius2_at(v.hit.p, ns);
+                    let point = &pilot[y as usize * width + x as usize];
+                    let own = point.radius2_at(v.hit.p, ns);
                     // Where the pilot cannot say, the pass's own k-th nearest photon does, and
                     // the photons that search found are the gather's.
                     let (r2, found) = match own {
@@ -176,7 +193,12 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                         },
                     };
                     let r2 = r2 * scale;
-                    let footprint = Footprint::probe(frame, &v.hit, ns, r2, rng, c);
+                    // Within the pilot's clear disc the surface fills this one: no probes.
+                    let footprint = if own.is_some() && point.clears(v.hit.p, r2) {
+                        Footprint::whole(r2)
+                    } else {
+                        Footprint::probe(frame, &v.hit, ns, r2, rng, c)
+                    };
                     let half = footprint.half();
                     let (phi, phi_half, _) =
                         fluxes_within(&maps, gathers, &v, ns, &footprint, Some(&half), found, c);
@@ -213,7 +235,7 @@ mod tests {
     /// The pilot's radius serves visible points on its own surface within it, and no other.
     #[test]
     fn the_pilot_radius_serves_its_own_surface_only() {
-        let pilot = PilotPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01 };
+        let pilot = PilotPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01, clear2: 0.0225 };
         assert_eq!(pilot.radius2_at(Vec3::new(0.05, 0.0, 0.05), Vec3::Y), Some(0.01));
         // Farther than its radius, on a surface turned away, on the back of the surface.
         assert_eq!(pilot.radius2_at(Vec3::new(0.1, 0.0, 0.05), Vec3::Y), None);
@@ -221,6 +243,12 @@ mod tests {
         assert_eq!(pilot.radius2_at(Vec3::ZERO, -Vec3::Y), None);
         // A pixel without a pilot point (no photon near it, or nothing seen).
         assert_eq!(PilotPoint::default().radius2_at(Vec3::ZERO, Vec3::Y), None);
+        // Discs within the one the pilot found whole need no probes; others, and any disc of a
+        // pilot point that found a wall, do.
+        assert!(pilot.clears(Vec3::new(0.05, 0.0, 0.0), 0.01));
+        assert!(!pilot.clears(Vec3::new(0.051, 0.0, 0.0), 0.01));
+        assert!(pilot.clears(Vec3::new(0.09, 0.0, 0.0), 0.0025 * 0.99));
+        assert!(!PilotPoint { clear2: 0.0, ..pilot }.clears(Vec3::ZERO, 1e-6));
     }
 
     #[test]

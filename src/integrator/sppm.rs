@@ -363,12 +363,15 @@ pub(super) fn fluxes_within(
     let (mut phi, mut phi_inner) = (Vec3::ZERO, Vec3::ZERO);
     let inner_r2 = inner.map_or(0.0, |f| f.r2);
     let mut m = 0u32;
+    let normals = v.hit.normals();
+    let constant = normals.gather_constant(&v.m, v.wo);
     c.timed(Part::Gathers, || {
         for (i, (map, params)) in with_params(maps, gathers).enumerate() {
             let visit = |offset, wi, power, d2| {
                 let inside = footprint.contains(offset);
                 if inside {
-                    let flux = v.hit.normals().gather_eval(&v.m, v.wo, wi) * power;
+                    let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi));
+                    let flux = f * power;
                     phi += flux;
                     if d2 < inner_r2 {
                         phi_inner += flux;
@@ -492,6 +495,19 @@ impl Footprint {
             }
         }
         fp
+    }
+
+    /// Whether the probes find the surface of `hit` filling the whole disc of squared radius
+    /// `r2` (no wall standing on it and no edge within it).
+    pub fn clear<A: Accel>(
+        frame: &Frame<'_, A>,
+        hit: &SurfaceHit,
+        ns: Vec3,
+        r2: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> bool {
+        !Footprint::cut_from(frame, hit, ns, r2, rng, c).cut
     }
 
     /// The footprint within the disc of squared radius `r2`.

@@ -136,6 +136,21 @@ impl Normals {
         m.pdf(n, wo, wi) + m.pdf(n, wo, self.mirrored(wi))
     }
 
+    /// What [`Normals::gather_eval`] gives every photon in front of the face, where that does
+    /// not depend on the photon's direction (a Lambertian lobe about an unbent normal): a gather
+    /// then weighs by it without evaluating the BSDF per photon.
+    #[inline]
+    pub fn gather_constant(&self, m: &Material, wo: Vec3) -> Option<Vec3> {
+        match *m {
+            Material::Diffuse { kd } | Material::Emissive { kd, .. }
+                if !self.bent && self.geometric.dot(wo) != 0.0 =>
+            {
+                Some(kd * std::f32::consts::FRAC_1_PI)
+            }
+            _ => None,
+        }
+    }
+
     /// The BSDF a gather weighs a photon arriving from `wp` by (`wp` in front of the face): the
     /// lobe's value at `wp`, or at its mirror image where `wp` is below the shading normal.
     #[inline]
@@ -246,6 +261,28 @@ mod tests {
             assert_eq!(s.sample, plain);
             assert_eq!(s.weight, plain.weight(Vec3::Z));
         }
+    }
+
+    /// The gather's constant is `gather_eval` bit for bit for every photon in front of the
+    /// face, on either side; there is none for a glossy lobe or a bent normal.
+    #[test]
+    fn a_lambertian_gather_weighs_every_photon_alike() {
+        let m = Material::Diffuse { kd: Vec3::new(0.3, 0.5, 0.7) };
+        let mut u = uniforms(9);
+        let mut dir = || Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5).normalize();
+        for n in [Normals::flat(Vec3::Z), Normals::flat(Vec3::new(0.6, 0.0, -0.8))] {
+            for _ in 0..1000 {
+                let (wo, wp) = (dir(), dir());
+                let front = if n.geometric.dot(wo) > 0.0 { n.geometric } else { -n.geometric };
+                if wp.dot(front) <= 0.0 {
+                    continue;
+                }
+                assert_eq!(n.gather_constant(&m, wo), Some(n.gather_eval(&m, wo, wp)));
+            }
+        }
+        let glossy = Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.4), ns: 30.0 };
+        assert_eq!(Normals::flat(Vec3::Z).gather_constant(&glossy, Vec3::Z), None);
+        assert_eq!(tilted().gather_constant(&m, Vec3::Z), None);
     }
 
     #[test]
