@@ -30,7 +30,7 @@
 use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use super::sppm::{
-    camera_samples, first_radius2, fluxes_within, pass_maps, visible_point, Footprint, Nearest, Scratch,
+    camera_samples, first_radius2, fluxes_within, pass_maps, visible_point, FirstPoint, Nearest, Scratch,
 };
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
@@ -50,7 +50,7 @@ pub struct PassIndexed<'f, 'a, A: Accel> {
     analysis: &'f Analysis,
     gathers: GatherPair,
     /// Each pixel's first radius, once the first pass has made it.
-    pilot: Option<Vec<PilotPoint>>,
+    pilot: Option<Vec<FirstPoint>>,
 }
 
 impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
@@ -59,43 +59,6 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         PassIndexed { frame, cfg, analysis, gathers, pilot: None }
     }
 }
-
-/// A pixel's visible point in the pilot and its first radius there (0: no photon near it).
-#[derive(Clone, Copy, Default)]
-struct PilotPoint {
-    p: Vec3,
-    /// The surface's unit normal on the viewer's side.
-    n: Vec3,
-    r2: f32,
-    /// The squared radius about `p` within which the pilot's probes found the surface whole
-    /// (`CLEAR² r2`; 0 where they found a wall or an edge).
-    clear2: f32,
-}
-
-impl PilotPoint {
-    /// The first radius for a visible point at `p` with normal `n` (on the viewer's side): the
-    /// pilot's where the point lies on the same surface within it, `None` elsewhere (a pixel
-    /// across an object's edge whose visible point fell on the other side this pass).
-    fn radius2_at(&self, p: Vec3, n: Vec3) -> Option<f32> {
-        let same = self.r2 > 0.0 && (p - self.p).length_squared() < self.r2 && n.dot(self.n) > PILOT_COS;
-        same.then_some(self.r2)
-    }
-
-    /// Whether the disc of squared radius `r2` about `p` (a visible point this pilot point
-    /// serves) lies within the disc the pilot found whole: then the disc needs no probes.
-    fn clears(&self, p: Vec3, r2: f32) -> bool {
-        let reach = (p - self.p).length() + r2.sqrt();
-        reach * reach <= self.clear2
-    }
-}
-
-/// How much wider than the first radius the pilot probes the surface for walls and edges: a
-/// pass's disc, about a visible point a little off the pilot's, must fit inside.
-const CLEAR: f32 = 1.5;
-
-/// The least cosine between a visible point's normal and its pixel's pilot point's for the
-/// pilot's radius to serve it (26°).
-const PILOT_COS: f32 = 0.9;
 
 /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
 /// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`. It depends on
@@ -109,13 +72,13 @@ fn pilot<A: Accel>(
     spp: u32,
     stats: &mut Stats,
     progress: &dyn Progress,
-) -> (Vec<PilotPoint>, Counters) {
+) -> (Vec<FirstPoint>, Counters) {
     let PassIndexed { frame, cfg, analysis, gathers, .. } = integrator;
     let samples = PixelSamples { spp, first: 0, seed: render_seed };
     let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
     let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
     let camera = &frame.camera;
-    let mut points = vec![PilotPoint::default(); camera.width as usize * camera.height as usize];
+    let mut points = vec![FirstPoint::default(); camera.width as usize * camera.height as usize];
     let why = "each pixel's first radius, from a pass of its own seed";
     let (_, c) = stats.run("pilot", why, |_| {
         for_each_pixel(
@@ -124,12 +87,9 @@ fn pilot<A: Accel>(
             pass.seed,
             &Quiet,
             |x, y, point, rng, nearest: &mut Nearest, c| {
-                let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) else { return Vec3::ZERO };
-                let n = face_forward(v.hit.n, v.wo);
-                if let Some(r2) = first_radius2(&maps, gathers, (x, y), v.hit.p, n, nearest, c) {
-                    let wide = CLEAR * CLEAR * r2;
-                    let clear2 = if Footprint::clear(frame, &v.hit, n, wide, rng, c) { wide } else { 0.0 };
-                    *point = PilotPoint { p: v.hit.p, n, r2, clear2 };
+                if let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) {
+                    let found = FirstPoint::find(frame, &maps, gathers, (x, y), &v, nearest, rng, c);
+                    *point = found.unwrap_or_default();
                 }
                 Vec3::ZERO
             },
@@ -193,12 +153,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                         },
                     };
                     let r2 = r2 * scale;
-                    // Within the pilot's clear disc the surface fills this one: no probes.
-                    let footprint = if own.is_some() && point.clears(v.hit.p, r2) {
-                        Footprint::whole(r2)
-                    } else {
-                        Footprint::probe(frame, &v.hit, ns, r2, rng, c)
-                    };
+                    let footprint = point.footprint(frame, &v, ns, r2, rng, c);
                     let half = footprint.half();
                     let (phi, phi_half, _) =
                         fluxes_within(&maps, gathers, &v, ns, &footprint, Some(&half), found, c);
@@ -229,27 +184,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
 
 #[cfg(test)]
 mod tests {
-    use super::{radius2_scale, PilotPoint};
-    use glam::Vec3;
-
-    /// The pilot's radius serves visible points on its own surface within it, and no other.
-    #[test]
-    fn the_pilot_radius_serves_its_own_surface_only() {
-        let pilot = PilotPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01, clear2: 0.0225 };
-        assert_eq!(pilot.radius2_at(Vec3::new(0.05, 0.0, 0.05), Vec3::Y), Some(0.01));
-        // Farther than its radius, on a surface turned away, on the back of the surface.
-        assert_eq!(pilot.radius2_at(Vec3::new(0.1, 0.0, 0.05), Vec3::Y), None);
-        assert_eq!(pilot.radius2_at(Vec3::ZERO, Vec3::new(0.0, 0.8, 0.6)), None);
-        assert_eq!(pilot.radius2_at(Vec3::ZERO, -Vec3::Y), None);
-        // A pixel without a pilot point (no photon near it, or nothing seen).
-        assert_eq!(PilotPoint::default().radius2_at(Vec3::ZERO, Vec3::Y), None);
-        // Discs within the one the pilot found whole need no probes; others, and any disc of a
-        // pilot point that found a wall, do.
-        assert!(pilot.clears(Vec3::new(0.05, 0.0, 0.0), 0.01));
-        assert!(!pilot.clears(Vec3::new(0.051, 0.0, 0.0), 0.01));
-        assert!(pilot.clears(Vec3::new(0.09, 0.0, 0.0), 0.0025 * 0.99));
-        assert!(!PilotPoint { clear2: 0.0, ..pilot }.clears(Vec3::ZERO, 1e-6));
-    }
+    use super::radius2_scale;
 
     #[test]
     fn the_radius_shrinks_as_knaus_and_zwicker_prescribe() {

@@ -61,6 +61,8 @@ struct PixelState {
     n: f32,
     /// Accumulated flux `τ`, scaled to the current radius.
     tau: Vec3,
+    /// Where the first radius was found.
+    first: FirstPoint,
 }
 
 /// Progressive photon mapping over a render's passes.
@@ -258,12 +260,12 @@ fn gather<A: Accel>(
     }
     let ns = face_forward(v.hit.n, v.wo);
     if st.r2 == 0.0 {
-        match first_radius2(maps, gathers, pixel, v.hit.p, ns, nearest, c) {
-            Some(r2) => st.r2 = r2,
+        match FirstPoint::find(frame, maps, gathers, pixel, v, nearest, rng, c) {
+            Some(first) => (st.r2, st.first) = (first.r2, first),
             None => return,
         }
     }
-    let footprint = Footprint::probe(frame, &v.hit, ns, st.r2, rng, c);
+    let footprint = st.first.footprint(frame, v, ns, st.r2, rng, c);
     let (phi, m) = flux_within(maps, gathers, v, ns, &footprint, c);
     if m == 0 {
         return;
@@ -278,6 +280,86 @@ fn gather<A: Accel>(
     st.tau = (st.tau + phi) * ratio;
     st.r2 *= ratio;
     st.n = n_new;
+}
+
+/// Where a pixel's first radius was found: the visible point (the pilot's in pass-indexed
+/// passes, the first pass's in stochastic ones), the surface's normal there, the radius, and
+/// how wide about it the surface was found whole. Later visible points of the pixel on the same
+/// surface take its radius, and their discs within the whole one need no probe rays.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct FirstPoint {
+    p: Vec3,
+    /// The surface's unit normal on the viewer's side.
+    n: Vec3,
+    /// The first radius, squared (0: no photon near the point, or nothing seen).
+    pub(super) r2: f32,
+    /// The squared radius about `p` within which the probes found the surface whole
+    /// (`CLEAR² r2`; 0 where they found a wall or an edge).
+    clear2: f32,
+}
+
+/// How much wider than the first radius the surface is probed for walls and edges: a later
+/// disc, about a visible point a little off the first, must fit inside.
+const CLEAR: f32 = 1.5;
+
+/// The least cosine between a visible point's normal and its pixel's first point's for the
+/// first point to serve it (26°).
+const SAME_SURFACE_COS: f32 = 0.9;
+
+impl FirstPoint {
+    /// The first radius at the visible point `v` of `pixel` (see [`first_radius2`], whose
+    /// photons are left in `nearest`) and the probes of its surface `CLEAR` times as wide.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn find<A: Accel>(
+        frame: &Frame<'_, A>,
+        maps: &PhotonMaps,
+        gathers: &GatherPair,
+        pixel: (u32, u32),
+        v: &Landing,
+        nearest: &mut Nearest,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> Option<FirstPoint> {
+        let n = face_forward(v.hit.n, v.wo);
+        let r2 = first_radius2(maps, gathers, pixel, v.hit.p, n, nearest, c)?;
+        let wide = CLEAR * CLEAR * r2;
+        let clear2 = if Footprint::clear(frame, &v.hit, n, wide, rng, c) { wide } else { 0.0 };
+        Some(FirstPoint { p: v.hit.p, n, r2, clear2 })
+    }
+
+    /// The first radius for a visible point at `p` with normal `n` (on the viewer's side): this
+    /// point's where the point lies on the same surface within it, `None` elsewhere (a pixel
+    /// across an object's edge whose visible point fell on the other side this pass).
+    pub(super) fn radius2_at(&self, p: Vec3, n: Vec3) -> Option<f32> {
+        let same =
+            self.r2 > 0.0 && (p - self.p).length_squared() < self.r2 && n.dot(self.n) > SAME_SURFACE_COS;
+        same.then_some(self.r2)
+    }
+
+    /// The footprint of the disc of squared radius `r2` about the visible point `v` (normal
+    /// `ns`): the whole disc where it lies within the disc this point found whole, on the same
+    /// surface; otherwise as the probes find it ([`Footprint::probe`]).
+    pub(super) fn footprint<A: Accel>(
+        &self,
+        frame: &Frame<'_, A>,
+        v: &Landing,
+        ns: Vec3,
+        r2: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> Footprint {
+        if self.radius2_at(v.hit.p, ns).is_some() && self.clears(v.hit.p, r2) {
+            Footprint::whole(r2)
+        } else {
+            Footprint::probe(frame, &v.hit, ns, r2, rng, c)
+        }
+    }
+
+    /// Whether the disc of squared radius `r2` about `p` lies within the disc found whole.
+    fn clears(&self, p: Vec3, r2: f32) -> bool {
+        let reach = (p - self.p).length() + r2.sqrt();
+        reach * reach <= self.clear2
+    }
 }
 
 /// The squared distance from `x` to the `k`-th nearest photon in the map where photons are
@@ -367,10 +449,10 @@ pub(super) fn fluxes_within(
     let constant = normals.gather_constant(&v.m, v.wo);
     c.timed(Part::Gathers, || {
         for (i, (map, params)) in with_params(maps, gathers).enumerate() {
-            let visit = |offset, wi, power, d2| {
+            let visit = |offset, wi: Vec3, power, d2| {
                 let inside = footprint.contains(offset);
                 if inside {
-                    let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi));
+                    let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi.normalize()));
                     let flux = f * power;
                     phi += flux;
                     if d2 < inner_r2 {
@@ -640,6 +722,26 @@ fn wedge_area(a: Vec2, b: Vec2, r: f32) -> f32 {
 mod tests {
     use super::*;
     use rand::SeedableRng;
+
+    /// A first point's radius serves visible points on its own surface within it, and no
+    /// other; discs inside the one found whole need no probes.
+    #[test]
+    fn a_first_point_serves_its_own_surface_only() {
+        let first = FirstPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01, clear2: 0.0225 };
+        assert_eq!(first.radius2_at(Vec3::new(0.05, 0.0, 0.05), Vec3::Y), Some(0.01));
+        // Farther than its radius, on a surface turned away, on the back of the surface.
+        assert_eq!(first.radius2_at(Vec3::new(0.1, 0.0, 0.05), Vec3::Y), None);
+        assert_eq!(first.radius2_at(Vec3::ZERO, Vec3::new(0.0, 0.8, 0.6)), None);
+        assert_eq!(first.radius2_at(Vec3::ZERO, -Vec3::Y), None);
+        // A pixel without a first point (no photon near it, or nothing seen).
+        assert_eq!(FirstPoint::default().radius2_at(Vec3::ZERO, Vec3::Y), None);
+        // Discs within the one it found whole need no probes; others, and any disc of a
+        // point that found a wall, do.
+        assert!(first.clears(Vec3::new(0.05, 0.0, 0.0), 0.01));
+        assert!(!first.clears(Vec3::new(0.051, 0.0, 0.0), 0.01));
+        assert!(first.clears(Vec3::new(0.09, 0.0, 0.0), 0.0025 * 0.99));
+        assert!(!FirstPoint { clear2: 0.0, ..first }.clears(Vec3::ZERO, 1e-6));
+    }
 
     /// The footprint's area (`share`) is the share of the disc where `contains` says yes, for
     /// polygons of every kind (probes that reach the rim, stop at a wall, or find nothing), so

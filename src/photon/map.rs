@@ -373,7 +373,8 @@ impl PhotonMap {
         count
     }
 
-    /// Calls `f(offset, wi, power, d2)` (`d2`: its squared distance in that metric) for every photon strictly inside the squared radius `r2` of
+    /// Calls `f(offset, wi, power, d2)` (`d2`: its squared distance in that metric; `wi` a
+    /// positive multiple of the direction the photon arrived from, not normalised) for every photon strictly inside the squared radius `r2` of
     /// `x` in the region flattened along `ns` (unit) by `flatten`, arriving from the side of
     /// `ns` (`offset` is the photon's position minus `x`); `f` says whether it counted the
     /// photon, and the photons counted are returned. The fixed-radius query of progressive
@@ -427,7 +428,8 @@ impl PhotonMap {
     }
 
     /// Offers photon `i`, at squared distance `d2` from `x` in the gather's metric, to `f` if
-    /// it arrives from the side of `ns`: whether `f` counted it.
+    /// it arrives from the side of `ns`: whether `f` counted it. Its direction goes to `f` as a
+    /// positive multiple, not normalised (a Lambertian gather never looks at it).
     #[inline(always)]
     fn offer(
         &self,
@@ -438,7 +440,7 @@ impl PhotonMap {
         f: &mut impl FnMut(Vec3, Vec3, Vec3, f32) -> bool,
     ) -> bool {
         let p = self.tree.get(i);
-        let wi = pack::decode_dir_oct(p.dir);
+        let wi = pack::decode_dir_oct_unnormalized(p.dir);
         wi.dot(ns) > 0.0 && f(p.position() - x, wi, self.power(p), d2)
     }
 
