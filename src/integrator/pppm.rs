@@ -55,7 +55,7 @@ pub struct PassIndexed<'f, 'a, A: Accel> {
 
 impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
     pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig, analysis: &'f Analysis) -> Self {
-        let gathers = GatherPair::new(&cfg.gathers, frame.scene);
+        let gathers = GatherPair::with_footprint(&cfg.gathers, frame.scene);
         PassIndexed { frame, cfg, analysis, gathers, pilot: None }
     }
 }

@@ -81,7 +81,7 @@ impl<'f, 'a, A: Accel> Progressive<'f, 'a, A> {
             frame,
             cfg,
             analysis,
-            gathers: GatherPair::new(&cfg.gathers, frame.scene),
+            gathers: GatherPair::with_footprint(&cfg.gathers, frame.scene),
             states: vec![PixelState::default(); pixels],
         }
     }
