@@ -58,44 +58,44 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         let gathers = GatherPair::with_footprint(&cfg.gathers, frame.scene);
         PassIndexed { frame, cfg, analysis, gathers, pilot: None }
     }
-}
 
-/// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
-/// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`. It depends on
-/// the render's seed only, so every pass, on whatever machine, scales the same radius; a
-/// pass's own photons then only need the fixed-radius query, and nothing in its estimate
-/// depends on where they happen to lie (Knaus and Zwicker's radius is independent of the
-/// pass's photons too).
-fn pilot<A: Accel>(
-    integrator: &PassIndexed<'_, '_, A>,
-    render_seed: u64,
-    spp: u32,
-    stats: &mut Stats,
-    progress: &dyn Progress,
-) -> (Vec<FirstPoint>, Counters) {
-    let PassIndexed { frame, cfg, analysis, gathers, .. } = integrator;
-    let samples = PixelSamples { spp, first: 0, seed: render_seed };
-    let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
-    let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
-    let camera = &frame.camera;
-    let mut points = vec![FirstPoint::default(); camera.width as usize * camera.height as usize];
-    let why = "each pixel's first radius, from a pass of its own seed";
-    let (_, c) = stats.run("pilot", why, |_| {
-        for_each_pixel(
-            camera.width as usize,
-            &mut points,
-            pass.seed,
-            &Quiet,
-            |x, y, point, rng, nearest: &mut Nearest, c| {
-                if let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) {
-                    let found = FirstPoint::find(frame, &maps, gathers, (x, y), &v, nearest, rng, c);
-                    *point = found.unwrap_or_default();
-                }
-                Vec3::ZERO
-            },
-        )
-    });
-    (points, c)
+    /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
+    /// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`. It depends on
+    /// the render's seed only, so every pass, on whatever machine, scales the same radius; a
+    /// pass's own photons then only need the fixed-radius query, and nothing in its estimate
+    /// depends on where they happen to lie (Knaus and Zwicker's radius is independent of the
+    /// pass's photons too).
+    fn pilot(
+        &self,
+        render_seed: u64,
+        spp: u32,
+        stats: &mut Stats,
+        progress: &dyn Progress,
+    ) -> (Vec<FirstPoint>, Counters) {
+        let PassIndexed { frame, cfg, analysis, gathers, .. } = self;
+        let samples = PixelSamples { spp, first: 0, seed: render_seed };
+        let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
+        let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
+        let camera = &frame.camera;
+        let mut points = vec![FirstPoint::default(); camera.width as usize * camera.height as usize];
+        let why = "each pixel's first radius, from a pass of its own seed";
+        let (_, c) = stats.run("pilot", why, |_| {
+            for_each_pixel(
+                camera.width as usize,
+                &mut points,
+                pass.seed,
+                &Quiet,
+                |x, y, point, rng, nearest: &mut Nearest, c| {
+                    if let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) {
+                        let found = FirstPoint::find(frame, &maps, gathers, (x, y), &v, nearest, rng, c);
+                        *point = found.unwrap_or_default();
+                    }
+                    Vec3::ZERO
+                },
+            )
+        });
+        (points, c)
+    }
 }
 
 /// `r²_i / r²_1` for the pass with 0-based index `pass`: `Π_{j=1}^{pass} (j + α) / (j + 1)`.
@@ -114,7 +114,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
         let mut pilot_counters = Counters::default();
         if self.pilot.is_none() {
             let (seed, spp) = (pass.samples.seed, pass.samples.spp);
-            let (points, c) = pilot(self, seed, spp, stats, progress);
+            let (points, c) = self.pilot(seed, spp, stats, progress);
             self.pilot = Some(points);
             pilot_counters = c;
         }
