@@ -444,31 +444,12 @@ pub(super) fn fluxes_within(
 ) -> (Vec3, Vec3, u32) {
     let (mut phi, mut phi_inner) = (Vec3::ZERO, Vec3::ZERO);
     let inner_r2 = inner.map_or(0.0, |f| f.r2);
-    let mut m = 0u32;
-    let normals = v.hit.normals();
-    let constant = normals.gather_constant(&v.m, v.wo);
-    c.timed(Part::Gathers, || {
-        for (i, (map, params)) in with_params(maps, gathers).enumerate() {
-            let visit = |offset, wi: Vec3, power, d2| {
-                let inside = footprint.contains(offset);
-                if inside {
-                    let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi.normalize()));
-                    let flux = f * power;
-                    phi += flux;
-                    if d2 < inner_r2 {
-                        phi_inner += flux;
-                    }
-                }
-                inside
-            };
-            let (p, r2) = (v.hit.p, footprint.r2);
-            m += match nearest {
-                Some(n) => map.for_each_found_inside(p, ns, r2, params, &n.found[i], visit),
-                None => map.for_each_inside(p, ns, r2, params.flatten, visit),
-            };
+    let m = for_each_flux(maps, gathers, v, ns, footprint, nearest, c, |flux, d2| {
+        phi += flux;
+        if d2 < inner_r2 {
+            phi_inner += flux;
         }
     });
-    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
     if m == 0 {
         // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
         return (Vec3::ZERO, Vec3::ZERO, 0);
@@ -480,8 +461,51 @@ pub(super) fn fluxes_within(
     (v.beta * phi / footprint.share, inner, m)
 }
 
+/// Calls `visit(flux, d2)` for every photon of every map over the `footprint` of the visible
+/// point `v` (within its disc, flattened along `ns`): its flux `f(wo, wi) power` (before the
+/// visible point's throughput `β` and the footprint's share) and its squared (flattened)
+/// distance. Returns how many photons there were. With `nearest` (what [`first_radius2`]
+/// found at this visible point) the photons are taken from there instead of searched for.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn for_each_flux(
+    maps: &PhotonMaps,
+    gathers: &GatherPair,
+    v: &Landing,
+    ns: Vec3,
+    footprint: &Footprint,
+    nearest: Option<&Nearest>,
+    c: &mut Counters,
+    mut visit: impl FnMut(Vec3, f32),
+) -> u32 {
+    let mut m = 0u32;
+    let normals = v.hit.normals();
+    let constant = normals.gather_constant(&v.m, v.wo);
+    c.timed(Part::Gathers, || {
+        for (i, (map, params)) in with_params(maps, gathers).enumerate() {
+            let each = |offset, wi: Vec3, power, d2| {
+                let inside = footprint.contains(offset);
+                if inside {
+                    let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi.normalize()));
+                    visit(f * power, d2);
+                }
+                inside
+            };
+            let (p, r2) = (v.hit.p, footprint.r2);
+            m += match nearest {
+                Some(n) => map.for_each_found_inside(p, ns, r2, params, &n.found[i], each),
+                None => map.for_each_inside(p, ns, r2, params.flatten, each),
+            };
+        }
+    });
+    c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;
+    m
+}
+
 /// Directions in which a visible point probes its surface, evenly spaced around it.
 pub(super) const PROBES: usize = 8;
+
+/// The least part of its own disc a footprint is taken to fill (see [`Footprint::probe`]).
+const LEAST_SHARE: f32 = 1.0 / 16.0;
 
 /// The part of a gather disc that the visible point's own surface fills, as far as rays cast
 /// down onto the surface can tell: the disc cut back by the walls standing on the surface and
@@ -575,6 +599,15 @@ impl Footprint {
             if small.share / shrink > fp.share {
                 fp = Footprint { share: small.share / shrink, ..small };
             }
+        }
+        // A footprint filling almost none of its own disc (a visible point on the very edge
+        // where two surfaces meet, whose lifted probe origin lands past the other surface) would
+        // weigh its few photons by thousands: a pixel of the Cornell box's top edge came out 9,000
+        // times too bright in one pass at k = 60. Its area is taken as no less than
+        // `LEAST_SHARE` of the disc: a bounded weight, and a little light lost on such points.
+        let least = LEAST_SHARE * fp.r2 / r2;
+        if fp.share < least {
+            fp.share = least;
         }
         fp
     }
@@ -741,6 +774,45 @@ mod tests {
         assert!(!first.clears(Vec3::new(0.051, 0.0, 0.0), 0.01));
         assert!(first.clears(Vec3::new(0.09, 0.0, 0.0), 0.0025 * 0.99));
         assert!(!FirstPoint { clear2: 0.0, ..first }.clears(Vec3::ZERO, 1e-6));
+    }
+
+    /// A visible point on the very edge where a wall meets the ceiling, a hair above the
+    /// ceiling's plane (as rounding put one on the Cornell box's top edge), lifts its probes'
+    /// origin past the ceiling: every probe meets the ceiling's back at once and the footprint
+    /// fills next to nothing of its disc. Its photons must not be weighed by thousands (that
+    /// pixel came out 9,000 times too bright in one pass at k = 60).
+    #[test]
+    fn a_footprint_on_an_edge_weighs_its_photons_boundedly() {
+        use crate::accel::bvh::Bvh;
+        use crate::light::LightSet;
+        use crate::tools::stress::scenes::{camera, Builder, Facing};
+        let mut b = Builder::default();
+        let m = b.material("white", crate::material::Material::Diffuse { kd: Vec3::splat(0.5) });
+        b.cuboid(-Vec3::ONE, Vec3::ONE, Facing::Inward, m);
+        let scene = b.build("edge", camera(Vec3::ZERO, Vec3::X, Vec3::Y, 60.0));
+        let accel = Bvh::build(&scene.mesh);
+        let lights = LightSet::new(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials);
+        let cam = scene.camera.with_resolution(8, 8);
+        let frame = Frame {
+            scene: &scene,
+            accel: &accel,
+            lights: &lights,
+            camera: cam,
+            views: std::slice::from_ref(&cam),
+        };
+        // The wall x = 1 (facing -x), its point on the edge with the ceiling y = 1.
+        let ray = Ray::new(Vec3::new(0.0, 1.0 - 1e-3, 0.0), Vec3::X);
+        let mut c = Counters::default();
+        let mut hit = frame.trace(&ray, &mut c).expect("the wall");
+        hit.p = Vec3::new(1.0, 1.0 + 2e-6, 0.0);
+        let ns = -Vec3::X;
+        let r2 = 0.01;
+        let mut rng = Pcg32::seed_from_u64(5);
+        for _ in 0..20 {
+            let fp = Footprint::probe(&frame, &hit, ns, r2, &mut rng, &mut c);
+            let own = fp.share * r2 / fp.r2;
+            assert!(own >= LEAST_SHARE, "the footprint fills {own} of its disc");
+        }
     }
 
     /// The footprint's area (`share`) is the share of the disc where `contains` says yes, for
