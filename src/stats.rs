@@ -98,6 +98,22 @@ pub struct Stats {
     pub rays_to_raw_ratio: f64,
     /// Where the camera stage's time went.
     pub camera_time: CameraTime,
+    /// How much pass-indexed progressive photon mapping widened its first radii (its pilot's
+    /// choice; `None` with other integrators).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub widening: Option<Widening>,
+}
+
+/// What the pilot of pass-indexed progressive photon mapping made of the first radii
+/// (`src/integrator/bandwidth.rs`).
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct Widening {
+    /// The pixels whose visible point the pilot measured.
+    pub pixels: u64,
+    /// The mean factor their first radius was widened by, in `[1, 2]`.
+    pub mean: f64,
+    /// The share of them widened fully (2×).
+    pub widest: f64,
 }
 
 /// The records of [`Stats::photons`] that hold precomputed-irradiance sites, not photons:

@@ -173,3 +173,22 @@ fn the_edges_of_a_sheet_are_not_dark() {
         assert!((mean / 2.0 - 1.0).abs() < 0.004, "{kind:?}: mean {mean}, exact 2");
     }
 }
+
+/// Pass-indexed passes widen their first radius where the light is flat (the pilot's choice,
+/// `src/integrator/bandwidth.rs`): in the white furnace, flat everywhere, most pixels widen,
+/// and the mean stays exact (corners and edges in view, where the widening must stop short of
+/// the walls). 16 passes of 20k photons, 48², 2 seeds.
+#[test]
+fn pppm_widens_where_the_light_is_flat_without_bias() {
+    let scene = furnace_view(Vec3::new(1.0, -1.0, 1.0), 60.0);
+    let settings = progressive(IntegratorKind::Pppm, 16, 20_000, 1);
+    let cfg = scene.render.overridden_by(&settings).resolve(48, 48).unwrap();
+    let out = render_scene(&scene, &cfg, &Quiet).unwrap();
+    let widening = out.stats.widening.expect("pppm reports its widening");
+    eprintln!("{widening:?}");
+    assert!(widening.pixels > 2000, "{widening:?}");
+    assert!(widening.mean > 1.3, "{widening:?}");
+    let mean = mean_of(&scene, &settings, 48, 2);
+    eprintln!("pppm, widened: mean {mean:.4} ({:+.3} %)", 100.0 * (mean / 2.0 - 1.0));
+    assert!((mean / 2.0 - 1.0).abs() < 0.003, "mean {mean}, exact 2");
+}

@@ -27,17 +27,19 @@
 //! disc's bias and `2 (L_r − L_{r/√2})` is an estimate of that bias, zero in expectation where
 //! the photon density is uniform.
 
+use super::bandwidth::{radius2_scale, summary, widenings, Spread};
 use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use super::sppm::{
-    camera_samples, first_radius2, fluxes_within, pass_maps, visible_point, FirstPoint, Nearest, Scratch,
+    camera_samples, camera_samples_variance, first_radius2, fluxes_within, pass_maps, visible_point,
+    FirstPoint, Scratch,
 };
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
 use crate::film::sums::Bias;
 use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, PixelSamples};
-use crate::frame::{Counters, Frame, Progress, Quiet};
+use crate::frame::{Counters, Frame, Progress, Quiet, SurfaceHit};
 use crate::material::face_forward;
 use crate::sampling::derive_seed;
 use crate::stats::Stats;
@@ -60,11 +62,11 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
     }
 
     /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
-    /// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`. It depends on
-    /// the render's seed only, so every pass, on whatever machine, scales the same radius; a
-    /// pass's own photons then only need the fixed-radius query, and nothing in its estimate
-    /// depends on where they happen to lie (Knaus and Zwicker's radius is independent of the
-    /// pass's photons too).
+    /// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`, widened where
+    /// the light about the pixel is flat ([`bandwidth`]). It depends on the render's seed only,
+    /// so every pass, on whatever machine, scales the same radius; a pass's own photons then
+    /// only need the fixed-radius query, and nothing in its estimate depends on where they
+    /// happen to lie (Knaus and Zwicker's radius is independent of the pass's photons too).
     fn pilot(
         &self,
         render_seed: u64,
@@ -77,31 +79,69 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
         let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
         let camera = &frame.camera;
-        let mut points = vec![FirstPoint::default(); camera.width as usize * camera.height as usize];
-        let why = "each pixel's first radius, from a pass of its own seed";
-        let (_, c) = stats.run("pilot", why, |_| {
-            for_each_pixel(
-                camera.width as usize,
-                &mut points,
+        let width = camera.width as usize;
+        let mut found = vec![Found::default(); width * camera.height as usize];
+        let ((points, summary), c) = stats.run("pilot", "", |_| {
+            let (_, mut c) = for_each_pixel(
+                width,
+                &mut found,
                 pass.seed,
                 &Quiet,
-                |x, y, point, rng, nearest: &mut Nearest, c| {
-                    if let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) {
-                        let found = FirstPoint::find(frame, &maps, gathers, (x, y), &v, nearest, rng, c);
-                        *point = found.unwrap_or_default();
+                |x, y, found, rng, scratch: &mut Scratch, c| {
+                    let camera = camera_samples_variance(frame, cfg, &pass, x, y, &mut scratch.batch, rng, c);
+                    found.spread.camera = camera;
+                    let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) else { return Vec3::ZERO };
+                    let ns = face_forward(v.hit.n, v.wo);
+                    if let Some(r2) =
+                        first_radius2(&maps, gathers, (x, y), v.hit.p, ns, &mut scratch.nearest, c)
+                    {
+                        let spread = Spread::measure(frame, &maps, gathers, &v, ns, r2, rng, c);
+                        found.point = Some((v.hit, ns, r2));
+                        found.spread = Spread { camera, ..spread };
                     }
                     Vec3::ZERO
                 },
-            )
+            );
+            let spreads: Vec<Spread> = found.iter().map(|f| f.spread).collect();
+            let widen = widenings(&spreads, width, cfg.alpha);
+            // Each point's surface probed about its widened radius (a seed of its own: the
+            // pixels' first seed drew their visible points).
+            let mut states: Vec<(Found, f32, FirstPoint)> =
+                found.iter().zip(&widen).map(|(f, u)| (*f, *u, FirstPoint::default())).collect();
+            let seed = derive_seed(pass.seed, 0x911070, 1);
+            let (_, probing) =
+                for_each_pixel(width, &mut states, seed, &Quiet, |_, _, state, rng, _: &mut (), c| {
+                    let (found, u, point) = state;
+                    if let Some((hit, ns, r2)) = &found.point {
+                        *point = FirstPoint::probed(frame, hit, *ns, *r2, *u, rng, c);
+                    }
+                    Vec3::ZERO
+                });
+            c += probing;
+            let points = states.into_iter().map(|(_, _, point)| point).collect();
+            ((points, summary(&widen, &spreads)), c)
         });
+        if let Some(stage) = stats.stages.last_mut() {
+            stage.reason = format!(
+                "each pixel's first radius, from a pass of its own seed: the k-th nearest photon's, widened \
+                 {:.2}x on average where the light is flat ({:.0} % of the {} pixels measured fully, 2x)",
+                summary.mean,
+                100.0 * summary.widest,
+                summary.pixels
+            );
+        }
+        stats.widening = Some(summary);
         (points, c)
     }
 }
 
-/// `r²_i / r²_1` for the pass with 0-based index `pass`: `Π_{j=1}^{pass} (j + α) / (j + 1)`.
-pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
-    let alpha = alpha as f64;
-    (1..=pass as u64).map(|j| (j as f64 + alpha) / (j as f64 + 1.0)).product::<f64>() as f32
+/// What the pilot found at a pixel: its visible point's surface, the normal on the viewer's
+/// side and the squared first radius (none where nothing was seen or no photon was near), and
+/// the spread of its estimates.
+#[derive(Clone, Copy, Debug, Default)]
+struct Found {
+    point: Option<(SurfaceHit, Vec3, f32)>,
+    spread: Spread,
 }
 
 impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
@@ -145,10 +185,10 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                     let own = point.radius2_at(v.hit.p, ns);
                     // Where the pilot cannot say, the pass's own k-th nearest photon does, and
                     // the photons that search found are the gather's.
-                    let (r2, found) = match own {
-                        Some(r2) => (r2, None),
+                    let (r2, found, narrow) = match own {
+                        Some(r2) => (r2, None, point.narrow),
                         None => match first_radius2(&maps, gathers, (x, y), v.hit.p, ns, nearest, c) {
-                            Some(r2) => (r2, Some(&*nearest)),
+                            Some(r2) => (r2, Some(&*nearest), 1.0),
                             None => return l,
                         },
                     };
@@ -156,7 +196,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                     let footprint = point.footprint(frame, &v, ns, r2, rng, c);
                     let half = footprint.half();
                     let (phi, phi_half, _) =
-                        fluxes_within(&maps, gathers, &v, ns, &footprint, Some(&half), found, c);
+                        fluxes_within(&maps, gathers, &v, ns, &footprint, Some(&half), found, narrow, c);
                     let area = std::f32::consts::PI * r2;
                     let photons = phi / area;
                     if photons.is_finite() {
@@ -179,20 +219,5 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
 
     fn bias(&self) -> Bias {
         Bias::Probed
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::radius2_scale;
-
-    #[test]
-    fn the_radius_shrinks_as_knaus_and_zwicker_prescribe() {
-        assert_eq!(radius2_scale(0, 0.7), 1.0);
-        assert!((radius2_scale(1, 0.7) - 1.7 / 2.0).abs() < 1e-6);
-        assert!((radius2_scale(2, 0.7) - 1.7 / 2.0 * 2.7 / 3.0).abs() < 1e-6);
-        // r²_i ~ i^(α-1): the ratio of passes 1000 and 100 is close to 10^(α-1).
-        let ratio = radius2_scale(999, 0.7) / radius2_scale(99, 0.7);
-        assert!((ratio - 10f32.powf(-0.3)).abs() < 0.01, "{ratio}");
     }
 }

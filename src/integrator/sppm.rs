@@ -199,6 +199,37 @@ pub(super) fn camera_samples<A: Accel>(
     mean.mean()
 }
 
+/// The variance of pixel `(x, y)`'s mean over its camera samples in `pass` (emission and
+/// direct light; summed over the channels), from the samples' own spread.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn camera_samples_variance<A: Accel>(
+    frame: &Frame<'_, A>,
+    cfg: &ProgressiveConfig,
+    pass: &Pass,
+    x: u32,
+    y: u32,
+    batch: &mut CameraBatch,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+) -> f64 {
+    frame.camera_rays(&pass.samples, x, y, batch, c);
+    let (mut sum, mut sq, mut n) = (Vec3::ZERO, Vec3::ZERO, 0u32);
+    for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
+        let l = trace_camera(frame, cfg, *ray, *hit, rng, c);
+        if l.is_finite() {
+            sum += l;
+            sq += l * l;
+            n += 1;
+        }
+    }
+    if n < 2 {
+        return 0.0;
+    }
+    let n = n as f64;
+    let var: f64 = (0..3).map(|i| (sq[i] as f64 - (sum[i] as f64).powi(2) / n) / (n - 1.0)).sum();
+    var.max(0.0) / n
+}
+
 /// Follows a camera sample through mirrors and glass: the emission seen and the direct light
 /// at the first diffuse or glossy surface.
 fn trace_camera<A: Accel>(
@@ -296,11 +327,14 @@ pub(super) struct FirstPoint {
     /// The squared radius about `p` within which the probes found the surface whole
     /// (`CLEAR² r2`; 0 where they found a wall or an edge).
     clear2: f32,
+    /// The caustic maps' squared radius over `r2` (below 1 where `r2` was widened for smooth
+    /// light, [`super::bandwidth`]).
+    pub(super) narrow: f32,
 }
 
 /// How much wider than the first radius the surface is probed for walls and edges: a later
 /// disc, about a visible point a little off the first, must fit inside.
-const CLEAR: f32 = 1.5;
+pub(super) const CLEAR: f32 = 1.5;
 
 /// The least cosine between a visible point's normal and its pixel's first point's for the
 /// first point to serve it (26°).
@@ -322,17 +356,35 @@ impl FirstPoint {
     ) -> Option<FirstPoint> {
         let n = face_forward(v.hit.n, v.wo);
         let r2 = first_radius2(maps, gathers, pixel, v.hit.p, n, nearest, c)?;
+        Some(FirstPoint::probed(frame, &v.hit, n, r2, 1.0, rng, c))
+    }
+
+    /// The first point at `hit` (unit normal `n` on the viewer's side) with the squared first
+    /// radius `r2` widened `widening` times (the caustic maps keep `r2`), its surface probed
+    /// `CLEAR` times as wide.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn probed<A: Accel>(
+        frame: &Frame<'_, A>,
+        hit: &SurfaceHit,
+        n: Vec3,
+        r2: f32,
+        widening: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> FirstPoint {
+        let r2 = r2 * widening;
         let wide = CLEAR * CLEAR * r2;
-        let clear2 = if Footprint::clear(frame, &v.hit, n, wide, rng, c) { wide } else { 0.0 };
-        Some(FirstPoint { p: v.hit.p, n, r2, clear2 })
+        let clear2 = if Footprint::clear(frame, hit, n, wide, rng, c) { wide } else { 0.0 };
+        FirstPoint { p: hit.p, n, r2, clear2, narrow: 1.0 / widening }
     }
 
     /// The first radius for a visible point at `p` with normal `n` (on the viewer's side): this
-    /// point's where the point lies on the same surface within it, `None` elsewhere (a pixel
-    /// across an object's edge whose visible point fell on the other side this pass).
+    /// point's where the point lies on the same surface within it (within the radius before
+    /// any widening: what the pilot measured holds about its own point), `None` elsewhere (a
+    /// pixel across an object's edge whose visible point fell on the other side this pass).
     pub(super) fn radius2_at(&self, p: Vec3, n: Vec3) -> Option<f32> {
-        let same =
-            self.r2 > 0.0 && (p - self.p).length_squared() < self.r2 && n.dot(self.n) > SAME_SURFACE_COS;
+        let near = self.r2 * self.narrow;
+        let same = self.r2 > 0.0 && (p - self.p).length_squared() < near && n.dot(self.n) > SAME_SURFACE_COS;
         same.then_some(self.r2)
     }
 
@@ -422,7 +474,7 @@ pub(super) fn flux_within(
     footprint: &Footprint,
     c: &mut Counters,
 ) -> (Vec3, u32) {
-    let (phi, _, m) = fluxes_within(maps, gathers, v, ns, footprint, None, None, c);
+    let (phi, _, m) = fluxes_within(maps, gathers, v, ns, footprint, None, None, 1.0, c);
     (phi, m)
 }
 
@@ -430,7 +482,9 @@ pub(super) fn flux_within(
 /// same visible point within a smaller radius, such as [`Footprint::half`]): both fluxes, each
 /// scaled to its own disc, and the photons over `footprint`. With `nearest` (what
 /// [`first_radius2`] found at this visible point) the photons are taken from there instead of
-/// searched for again.
+/// searched for again. The caustic maps are gathered over the disc of `narrow` (in `(0, 1]`)
+/// times the area (and `inner`'s likewise), their flux scaled up to the wider disc's: a radius
+/// widened for smooth light ([`super::bandwidth`]) leaves the caustics as sharp as they were.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn fluxes_within(
     maps: &PhotonMaps,
@@ -440,53 +494,88 @@ pub(super) fn fluxes_within(
     footprint: &Footprint,
     inner: Option<&Footprint>,
     nearest: Option<&Nearest>,
+    narrow: f32,
     c: &mut Counters,
 ) -> (Vec3, Vec3, u32) {
     let (mut phi, mut phi_inner) = (Vec3::ZERO, Vec3::ZERO);
     let inner_r2 = inner.map_or(0.0, |f| f.r2);
-    let m = for_each_flux(maps, gathers, v, ns, footprint, nearest, c, |flux, d2| {
-        phi += flux;
-        if d2 < inner_r2 {
-            phi_inner += flux;
+    // The caustic maps' own discs, where narrower.
+    let apart = narrow < 1.0 && !maps.caustic.is_empty();
+    let caustic = if apart { footprint.within(narrow) } else { *footprint };
+    let caustic_inner = inner.map(|_| caustic.half());
+    let caustic_inner_r2 = caustic_inner.map_or(0.0, |f| f.r2);
+    let (mut phi_c, mut phi_c_inner) = (Vec3::ZERO, Vec3::ZERO);
+    let m = for_each_flux(maps, gathers, v, ns, [footprint, &caustic], nearest, c, |flux, d2, is_caustic| {
+        if apart && is_caustic {
+            phi_c += flux;
+            if d2 < caustic_inner_r2 {
+                phi_c_inner += flux;
+            }
+        } else {
+            phi += flux;
+            if d2 < inner_r2 {
+                phi_inner += flux;
+            }
         }
     });
     if m == 0 {
         // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
         return (Vec3::ZERO, Vec3::ZERO, 0);
     }
+    // Flux over a footprint of `share` of a disc of `narrow` times the area, as over the whole
+    // of the wider disc.
+    let scaled = |flux: Vec3, share: f32, narrow: f32| {
+        if share > 0.0 {
+            flux / (share * narrow)
+        } else {
+            Vec3::ZERO
+        }
+    };
     let inner = match inner {
+        Some(f) if f.share > 0.0 && apart => {
+            let c_share = caustic_inner.map_or(0.0, |f| f.share);
+            v.beta * (phi_inner / f.share + scaled(phi_c_inner, c_share, narrow))
+        }
         Some(f) if f.share > 0.0 => v.beta * phi_inner / f.share,
         _ => Vec3::ZERO,
     };
+    if apart {
+        return (v.beta * (phi / footprint.share + scaled(phi_c, caustic.share, narrow)), inner, m);
+    }
     (v.beta * phi / footprint.share, inner, m)
 }
 
-/// Calls `visit(flux, d2)` for every photon of every map over the `footprint` of the visible
-/// point `v` (within its disc, flattened along `ns`): its flux `f(wo, wi) power` (before the
-/// visible point's throughput `β` and the footprint's share) and its squared (flattened)
-/// distance. Returns how many photons there were. With `nearest` (what [`first_radius2`]
-/// found at this visible point) the photons are taken from there instead of searched for.
+/// Calls `visit(flux, d2, caustic)` for every photon of every map over the footprint of the
+/// visible point `v` for its kind of map (`footprints`: the indirect maps', the caustic
+/// maps'; within their discs, flattened along `ns`): its flux `f(wo, wi) power` (before the
+/// visible point's throughput `β` and the footprint's share), its squared (flattened) distance
+/// and whether it is a caustic photon. Returns how many photons there were. With `nearest`
+/// (what [`first_radius2`] found at this visible point) the photons are taken from there
+/// instead of searched for.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn for_each_flux(
     maps: &PhotonMaps,
     gathers: &GatherPair,
     v: &Landing,
     ns: Vec3,
-    footprint: &Footprint,
+    footprints: [&Footprint; 2],
     nearest: Option<&Nearest>,
     c: &mut Counters,
-    mut visit: impl FnMut(Vec3, f32),
+    mut visit: impl FnMut(Vec3, f32, bool),
 ) -> u32 {
     let mut m = 0u32;
     let normals = v.hit.normals();
     let constant = normals.gather_constant(&v.m, v.wo);
+    let indirect = maps.indirect.len();
     c.timed(Part::Gathers, || {
         for (i, (map, params)) in with_params(maps, gathers).enumerate() {
+            let is_caustic = i >= indirect;
+            let footprint = footprints[usize::from(is_caustic)];
             let each = |offset, wi: Vec3, power, d2| {
                 let inside = footprint.contains(offset);
                 if inside {
                     let f = constant.unwrap_or_else(|| normals.gather_eval(&v.m, v.wo, wi.normalize()));
-                    visit(f * power, d2);
+                    visit(f * power, d2, is_caustic);
                 }
                 inside
             };
@@ -698,7 +787,13 @@ impl Footprint {
     /// one, before any shrinking in [`Footprint::probe`]), so that flux over `share` estimates
     /// the same radiance over `π r² / 2` as over `π r²`, less the bias of the larger disc.
     pub fn half(&self) -> Footprint {
-        let r2 = 0.5 * self.r2;
+        self.within(0.5)
+    }
+
+    /// The footprint over the same surface within the disc of `fraction` (in `(0, 1]`) of the
+    /// area, its `share` of that disc (as [`Footprint::half`]).
+    pub fn within(&self, fraction: f32) -> Footprint {
+        let r2 = fraction * self.r2;
         if !self.cut {
             return Footprint { r2, ..*self };
         }
@@ -707,7 +802,16 @@ impl Footprint {
         };
         let outer = area(self.r2.sqrt());
         let ratio = if outer > 0.0 { area(r2.sqrt()) / outer } else { 0.0 };
-        Footprint { r2, share: (2.0 * self.share * ratio).clamp(0.0, 1.0), ..*self }
+        Footprint { r2, share: (self.share / fraction * ratio).clamp(0.0, 1.0), ..*self }
+    }
+
+    /// How far from the visible point the surface was found whole: the nearest of the probes'
+    /// end points where a wall or an edge cut the disc, else the disc's radius.
+    pub fn reach(&self) -> f32 {
+        if !self.cut {
+            return self.r2.sqrt();
+        }
+        self.ends.iter().map(|e| e.length()).fold(f32::INFINITY, f32::min)
     }
 
     /// Whether a photon at `offset` from the visible point lies over the footprint (its
@@ -760,7 +864,7 @@ mod tests {
     /// other; discs inside the one found whole need no probes.
     #[test]
     fn a_first_point_serves_its_own_surface_only() {
-        let first = FirstPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01, clear2: 0.0225 };
+        let first = FirstPoint { p: Vec3::ZERO, n: Vec3::Y, r2: 0.01, clear2: 0.0225, narrow: 1.0 };
         assert_eq!(first.radius2_at(Vec3::new(0.05, 0.0, 0.05), Vec3::Y), Some(0.01));
         // Farther than its radius, on a surface turned away, on the back of the surface.
         assert_eq!(first.radius2_at(Vec3::new(0.1, 0.0, 0.05), Vec3::Y), None);
@@ -784,15 +888,40 @@ mod tests {
     #[test]
     fn a_footprint_on_an_edge_weighs_its_photons_boundedly() {
         use crate::accel::bvh::Bvh;
+        use crate::geometry::TriangleMesh;
         use crate::light::LightSet;
-        use crate::tools::stress::scenes::{camera, Builder, Facing};
-        let mut b = Builder::default();
-        let m = b.material("white", crate::material::Material::Diffuse { kd: Vec3::splat(0.5) });
-        b.cuboid(-Vec3::ONE, Vec3::ONE, Facing::Inward, m);
-        let scene = b.build("edge", camera(Vec3::ZERO, Vec3::X, Vec3::Y, 60.0));
+        use crate::material::Material;
+        use crate::scene::{Camera, Scene, SceneCamera};
+        // A wall x = 1 and a ceiling y = 1 meeting along an edge (two-sided diffuse).
+        let positions = vec![
+            Vec3::new(1.0, -1.0, -1.0),
+            Vec3::new(1.0, 1.0, -1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+            Vec3::new(1.0, -1.0, 1.0),
+            Vec3::new(-1.0, 1.0, -1.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+        ];
+        let indices = vec![[0, 1, 2], [0, 2, 3], [4, 1, 2], [4, 2, 5]];
+        let cam = Camera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 60.0, 8, 8).unwrap();
+        let scene = Scene {
+            path: "edge".into(),
+            camera: cam,
+            cameras: vec![SceneCamera::still("camera", cam)],
+            mesh: TriangleMesh { positions, indices },
+            attributes: Default::default(),
+            tri_material: vec![0; 4],
+            materials: vec![Material::Diffuse { kd: Vec3::splat(0.5) }],
+            maps: vec![Default::default()],
+            textured: false,
+            textures: Default::default(),
+            warnings: Vec::new(),
+            material_names: vec!["white".into()],
+            lights: Vec::new(),
+            portals: Vec::new(),
+            render: Default::default(),
+        };
         let accel = Bvh::build(&scene.mesh);
         let lights = LightSet::new(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials);
-        let cam = scene.camera.with_resolution(8, 8);
         let frame = Frame {
             scene: &scene,
             accel: &accel,

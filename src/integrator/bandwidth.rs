@@ -1,0 +1,396 @@
+//! How wide each pixel's first radius should be: the `k`-th nearest photon's distance `r_1`,
+//! widened (up to twice, `WIDEST2` in area) where the pilot finds the light flat about the
+//! pixel, so that there the passes gather more photons for the same bias.
+//!
+//! Pass `i` gathers within `r²_i = u r²_1 σ_i` (`σ_i`, the [`radius2_scale`], shrinks as
+//! `i^(α-1)`; `u` is the widening, in area). Where the light varies smoothly over a whole disc
+//! the estimate's bias grows with the disc's area (the second-order term of its Taylor
+//! expansion; the first cancels over the symmetric disc): `u σ_i b`, `b` the bias at `r_1`; its
+//! variance falls as the photons in it grow: `V / (u σ_i)`, `V` at `r_1`. The camera samples'
+//! variance `C` (emission and direct light) does not change, but a wider gather takes longer:
+//! passes take `T = 1 + GATHER_COST (ū − 1)` times as long (`ū` the image's mean widening), and
+//! fewer fit in the time. The image's squared error, the mean over its pixels `p` of the
+//! passes a time allows (`n = PASSES` unwidened), is then
+//!
+//! ```text
+//! MSE = mean_p [ (u_p σ̄ b_p)² + (C_p + V_p ρ̄ / u_p) T / n ],   σ̄ = mean σ_i,  ρ̄ = mean 1/σ_i
+//! ```
+//!
+//! A pixel's widening lengthens every pixel's passes: given the others', its best `u` is the
+//! least (on a grid over `[1, WIDEST2]`) of `(u σ̄ b)² + V ρ̄ T / (n u) + GATHER_COST Ē u / n`,
+//! `Ē` the image's mean variance per pass; `ROUNDS` rounds of every pixel's choice settle it.
+//! (Alone, with no cost, `u³ = V ρ̄ / (2 n σ̄² b²)`.) `n` is fixed: `ρ̄ / (n σ̄²)` goes as
+//! `n^(2 - 3α)`, so `u` moves as `n^(-0.03)` at α = 0.7, and it must not depend on how many
+//! passes a render happens to make, or the parts of a split render would not agree.
+//!
+//! The pilot measures `b`, `V` and `C` at each pixel's visible point, from its own photons and
+//! camera samples. `b` comes from the indirect photons (caustics keep their radius: their
+//! light is focused, and sharp at any scale) within the disc of radius `R = 3 r_1`
+//! (`MEASURE2`; cut to the surface's footprint as the passes' gathers are) and the disc of half
+//! its area: `2 (L_R − L_{R/√2})` is the bias at `R` (as in the passes' own bias probe,
+//! [`super::pppm`]) and a ninth of it the bias at `r_1`; `V` comes from the photons within
+//! `r_1`, `Σ flux² / area²`; `C` from the spread of the pixel's camera samples. From `b`'s
+//! estimate `b̂`, `b̂² − var(b̂)` estimates `b²` without bias; its noise at one pixel is still
+//! about `V / 130` where the radius widens fully below `b² = V / 600` and not at all above
+//! `V / 10`, so each pixel pools `b²` and `V` over the pixels of a square window about it
+//! (`WINDOW` pixels each way): `u` is the best for the window, and changes smoothly across the
+//! image.
+//!
+//! Next to a wall or an edge the disc is cut off centre and the first-order term no longer
+//! cancels: the bias grows as the radius, not its square, and the two discs understate it (a
+//! scanned bunny's foot on the floor came out bright in the blocks around it, and the image's
+//! RMSE rose 5 %). So a pixel
+//! widens only as far as its disc, `CLEAR` times wider for the next passes' visible points
+//! about the pilot's, stays on the part of its surface the measuring disc's probes found whole.
+//! `u` is at least 1 (the `k`-th nearest photon) and at most `WIDEST2`.
+
+use super::sppm::{for_each_flux, Footprint, CLEAR};
+use crate::accel::Accel;
+use crate::frame::specular::Landing;
+use crate::frame::{Counters, Frame};
+use crate::photon::map::PhotonMaps;
+use crate::stats::Widening;
+use glam::Vec3;
+use rand_pcg::Pcg32;
+
+use super::maps::GatherPair;
+
+/// `r²_i / r²_1` for the pass with 0-based index `pass` (Knaus and Zwicker's schedule):
+/// `Π_{j=1}^{pass} (j + α) / (j + 1)`.
+pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
+    let alpha = alpha as f64;
+    (1..=pass as u64).map(|j| (j as f64 + alpha) / (j as f64 + 1.0)).product::<f64>() as f32
+}
+
+/// The widest first radius, over the `k`-th nearest photon's, squared.
+pub(super) const WIDEST2: f32 = 4.0;
+
+/// The squared radius of the disc the pilot measures the bias over, over the `k`-th nearest
+/// photon's: wider than the widest first radius, for an estimate of the bias with
+/// `MEASURE2³` (729) times less variance than one at `r_1` would have (the light must be flat over it
+/// for the radius to widen much).
+const MEASURE2: f32 = 9.0;
+
+/// How many pixels each way a pixel's window reaches.
+const WINDOW: usize = 8;
+
+/// The passes the widening is chosen for (it hardly depends on them; see the module's notes).
+const PASSES: u32 = 64;
+
+/// What the pilot found about one pixel's photon estimate at its first radius.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Spread {
+    /// An unbiased estimate of the squared bias at `r_1` (summed over the channels).
+    pub bias2: f64,
+    /// An estimate of one pass's variance at `r_1` (summed over the channels).
+    pub var: f64,
+    /// An estimate of the variance of one pass's camera samples' mean (emission and direct
+    /// light; summed over the channels): what widening does not reduce.
+    pub camera: f64,
+    /// The most the squared radius may widen before the disc reaches a wall or an edge
+    /// (`WIDEST2` where the measured disc lay whole on the surface).
+    pub room: f32,
+    /// Whether the pixel was measured (a visible point with photons near it, on a surface at
+    /// least as wide as the widest disc's footprint allows).
+    pub measured: bool,
+}
+
+impl Spread {
+    /// Measures the photons of `maps` about the visible point `v` (surface normal `ns`, first
+    /// radius `r²_1 = r2`) within the widest disc.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn measure<A: Accel>(
+        frame: &Frame<'_, A>,
+        maps: &PhotonMaps,
+        gathers: &GatherPair,
+        v: &Landing,
+        ns: Vec3,
+        r2: f32,
+        rng: &mut Pcg32,
+        c: &mut Counters,
+    ) -> Spread {
+        let wide2 = MEASURE2 * r2;
+        let wide = Footprint::probe(frame, &v.hit, ns, wide2, rng, c);
+        // A surface narrower than the measured disc (the probes fell back on a smaller one), or
+        // none of it: not measured.
+        if wide.r2 != wide2 || wide.share <= 0.0 {
+            return Spread::default();
+        }
+        let half = wide.half();
+        let first = wide.within(1.0 / MEASURE2);
+        let (mut all, mut inner) = ((Vec3::ZERO, Vec3::ZERO), (Vec3::ZERO, Vec3::ZERO));
+        let mut first_sq = Vec3::ZERO;
+        // The indirect maps only: caustics keep their radius (see `fluxes_within`).
+        let none = Footprint::whole(0.0);
+        let m = for_each_flux(maps, gathers, v, ns, [&wide, &none], None, c, |flux, d2, _| {
+            let sq = flux * flux;
+            all.0 += flux;
+            all.1 += sq;
+            if d2 < half.r2 {
+                inner.0 += flux;
+                inner.1 += sq;
+            }
+            if d2 < first.r2 {
+                first_sq += sq;
+            }
+        });
+        if m == 0 || half.share <= 0.0 || first.share <= 0.0 {
+            return Spread::default();
+        }
+        let pi = std::f64::consts::PI as f32;
+        let (area, area_half, area_first) =
+            (pi * wide2 * wide.share, pi * half.r2 * half.share, pi * first.r2 * first.share);
+        let beta2 = v.beta * v.beta;
+        // The bias at R, 2 (L_R − L_h), and its variance: each photon's flux weighs
+        // 2 (1/A_R − 1/A_h) inside the half disc and 2/A_R outside it.
+        let bias_wide = 2.0 * v.beta * (all.0 / area - inner.0 / area_half);
+        let w_in = 2.0 * (1.0 / area - 1.0 / area_half);
+        let w_out = 2.0 / area;
+        let var_wide = beta2 * (w_in * w_in * inner.1 + w_out * w_out * (all.1 - inner.1));
+        // At r_1 the bias is 1/MEASURE2 of that, its estimate's variance 1/MEASURE2².
+        let b = bias_wide / MEASURE2;
+        let var_b = var_wide / (MEASURE2 * MEASURE2);
+        let bias2 = (b * b - var_b).element_sum() as f64;
+        let var = (beta2 * first_sq / (area_first * area_first)).element_sum() as f64;
+        if !(bias2.is_finite() && var.is_finite()) {
+            return Spread::default();
+        }
+        // Widening must not carry the disc over a wall or an edge: there the disc is cut off
+        // centre, its bias grows as the radius (not its square) and the two discs above
+        // understate it.
+        let room = (wide.reach() * wide.reach() / (CLEAR * CLEAR * r2)).clamp(1.0, WIDEST2);
+        Spread { bias2, var, camera: 0.0, room, measured: true }
+    }
+}
+
+/// Each pixel's widening `u = s²` of its squared first radius, from the spreads of the
+/// pixels in its window (row-major, `width` wide), for progressive radii shrinking with
+/// `alpha`. Pixels not measured keep `u = 1`.
+pub(super) fn widenings(spreads: &[Spread], width: usize, alpha: f32) -> Vec<f32> {
+    let height = spreads.len() / width.max(1);
+    // Summed-area tables of the squared bias, the photons' variance and the pixels measured.
+    let (w1, h1) = (width + 1, height + 1);
+    let mut table = vec![[0f64; 3]; w1 * h1];
+    for y in 0..height {
+        let mut row = [0f64; 3];
+        for x in 0..width {
+            let s = &spreads[y * width + x];
+            if s.measured {
+                row[0] += s.bias2;
+                row[1] += s.var;
+                row[2] += 1.0;
+            }
+            let above = table[y * w1 + x + 1];
+            table[(y + 1) * w1 + x + 1] = std::array::from_fn(|i| above[i] + row[i]);
+        }
+    }
+    // Each measured pixel's window means.
+    let mut pooled = vec![(0f64, 0f64); spreads.len()];
+    for y in 0..height {
+        let (y0, y1) = (y.saturating_sub(WINDOW), (y + WINDOW + 1).min(height));
+        for x in 0..width {
+            let (x0, x1) = (x.saturating_sub(WINDOW), (x + WINDOW + 1).min(width));
+            let at = |x: usize, y: usize| table[y * w1 + x];
+            let (a, b, c, d) = (at(x1, y1), at(x0, y1), at(x1, y0), at(x0, y0));
+            let sum = |i: usize| a[i] - b[i] - c[i] + d[i];
+            let n = sum(2).max(1.0);
+            pooled[y * width + x] = (sum(0) / n, sum(1) / n);
+        }
+    }
+    let model = Model::new(alpha);
+    let mut out = vec![1.0f32; spreads.len()];
+    // The widening of one pixel slows every pixel's passes: each pixel's choice weighs the
+    // image's mean variance, which depends on every choice; a few rounds settle it.
+    for _ in 0..ROUNDS {
+        let image = model.image(spreads, &out);
+        let next: Vec<f32> = spreads
+            .iter()
+            .zip(&pooled)
+            .map(
+                |(s, &(bias2, var))| {
+                    if s.measured {
+                        model.widening(bias2, var, image).min(s.room)
+                    } else {
+                        1.0
+                    }
+                },
+            )
+            .collect();
+        out = next;
+    }
+    out
+}
+
+/// Rounds of [`widenings`]' choice (each pixel's given the others').
+const ROUNDS: usize = 4;
+
+/// What the widenings came to, for `--stats`: their mean (of the radius, `√u`) and how many
+/// pixels were widest, over the pixels measured.
+pub(super) fn summary(widen: &[f32], spreads: &[Spread]) -> Widening {
+    let measured: Vec<f32> = widen.iter().zip(spreads).filter(|(_, s)| s.measured).map(|(u, _)| *u).collect();
+    let n = measured.len().max(1) as f64;
+    Widening {
+        pixels: measured.len() as u64,
+        mean: measured.iter().map(|u| (*u as f64).sqrt()).sum::<f64>() / n,
+        widest: measured.iter().filter(|u| **u >= WIDEST2).count() as f64 / n,
+    }
+}
+
+/// How much longer a pass takes per unit of widening: a widened gather visits `u` times the
+/// photons, and a pass takes `1 + GATHER_COST (u − 1)` times as long, so fewer passes fit in
+/// the time. Measured with `--stats` on 20–30 passes before and after widening nearly every
+/// pixel fully (`u` about 3.8): the white furnace's passes took 1.16× as long per unit of
+/// `u − 1` in the camera stage (0.12 over the whole pass, photons and kd-tree included), the
+/// caustics scene's 1.10× (0.06).
+const GATHER_COST: f64 = 0.1;
+
+/// The squared error of the mean of the passes a time allows as a function of the widening.
+struct Model {
+    /// `σ̄`, the mean of `r²_i / r²_1` over the passes.
+    sigma: f64,
+    /// `ρ̄`, the mean of `r²_1 / r²_i`.
+    rho: f64,
+}
+
+/// What every pixel's choice shares: how much longer the passes take, and the image's mean
+/// variance (per pass) that each unit of that costs.
+#[derive(Clone, Copy, Debug)]
+struct Image {
+    /// The passes' time over the unwidened passes' (`1 + GATHER_COST (ū − 1)`).
+    slower: f64,
+    /// The mean over the image of one pass's variance (camera samples and photons).
+    var: f64,
+}
+
+impl Model {
+    fn new(alpha: f32) -> Self {
+        let n = PASSES as f64;
+        let (mut sigma, mut rho) = (0.0, 0.0);
+        for i in 0..PASSES {
+            let s = radius2_scale(i, alpha) as f64;
+            sigma += s / n;
+            rho += 1.0 / (s * n);
+        }
+        Model { sigma, rho }
+    }
+
+    /// What the widenings `u` make of the whole image.
+    fn image(&self, spreads: &[Spread], u: &[f32]) -> Image {
+        let n = spreads.len().max(1) as f64;
+        let mean_u = u.iter().map(|&u| u as f64).sum::<f64>() / n;
+        let var = spreads
+            .iter()
+            .zip(u)
+            .map(|(s, &u)| s.camera + if s.measured { s.var * self.rho / u as f64 } else { 0.0 })
+            .sum::<f64>()
+            / n;
+        Image { slower: 1.0 + GATHER_COST * (mean_u - 1.0), var }
+    }
+
+    /// A pixel's part of the image's squared error at widening `u` (`PASSES` passes in the
+    /// time, unwidened), for its squared bias `bias2` and its photons' variance `var` at `r_1`:
+    /// its bias, its photons' noise, and what its wider gathers take from every pixel's passes
+    /// (`image.var` per pass more of the time, for each unit of `u`).
+    fn mse(&self, u: f64, bias2: f64, var: f64, image: Image) -> f64 {
+        let n = PASSES as f64;
+        let bias = u * self.sigma;
+        bias * bias * bias2.max(0.0)
+            + var * self.rho * image.slower / (u * n)
+            + GATHER_COST * image.var * u / n
+    }
+
+    /// The widening in `[1, WIDEST2]` (in 64 steps) of least squared error for the pooled
+    /// `bias2` and `var`.
+    fn widening(&self, bias2: f64, var: f64, image: Image) -> f32 {
+        if !(var > 0.0) {
+            return 1.0;
+        }
+        let steps = 64;
+        let u = |j: u32| 1.0 + (WIDEST2 as f64 - 1.0) * j as f64 / steps as f64;
+        let best = (0..=steps).min_by(|&a, &b| {
+            let (ea, eb) = (self.mse(u(a), bias2, var, image), self.mse(u(b), bias2, var, image));
+            ea.total_cmp(&eb)
+        });
+        best.map_or(1.0, u) as f32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_radius_shrinks_as_knaus_and_zwicker_prescribe() {
+        assert_eq!(radius2_scale(0, 0.7), 1.0);
+        assert!((radius2_scale(1, 0.7) - 1.7 / 2.0).abs() < 1e-6);
+        assert!((radius2_scale(2, 0.7) - 1.7 / 2.0 * 2.7 / 3.0).abs() < 1e-6);
+        // r²_i ~ i^(α-1): the ratio of passes 1000 and 100 is close to 10^(α-1).
+        let ratio = radius2_scale(999, 0.7) / radius2_scale(99, 0.7);
+        assert!((ratio - 10f32.powf(-0.3)).abs() < 0.01, "{ratio}");
+    }
+
+    /// The widening is the least squared error in a fixed time: wide where the bias is small
+    /// against the photons' noise, the `k`-th photon's where it is large, and less wide where
+    /// the image's noise is mostly the camera samples' (which widening does not reduce), since
+    /// a wider gather takes time from every pixel.
+    #[test]
+    fn the_widening_minimises_the_squared_error() {
+        let model = Model::new(0.7);
+        let n = PASSES as f64;
+        let sigmas: Vec<f64> = (0..PASSES).map(|i| radius2_scale(i, 0.7) as f64).collect();
+        assert!((model.sigma - sigmas.iter().sum::<f64>() / n).abs() < 1e-9);
+        assert!((model.rho - sigmas.iter().map(|s| 1.0 / s).sum::<f64>() / n).abs() < 1e-9);
+        let quiet = Image { slower: 1.0, var: 0.0 };
+        let noisy = |var: f64| Image { slower: 1.2, var };
+        for (b2, v, image) in
+            [(1e-4, 1.0, quiet), (1e-2, 1.0, quiet), (0.05, 1.0, noisy(1.0)), (0.0, 1.0, noisy(30.0))]
+        {
+            let u = model.widening(b2, v, image) as f64;
+            let best = (0..=3000)
+                .map(|j| 1.0 + (WIDEST2 as f64 - 1.0) * j as f64 / 3000.0)
+                .map(|w| model.mse(w, b2, v, image))
+                .fold(f64::INFINITY, f64::min);
+            // Within the 64 steps' resolution of the best.
+            assert!(model.mse(u, b2, v, image) <= best * 1.001, "b² {b2} {image:?}: u {u}");
+        }
+        // Flat light and nothing else to pay for: the widest; none of the photons' noise: none.
+        assert_eq!(model.widening(0.0, 1.0, quiet), WIDEST2);
+        assert_eq!(model.widening(-0.1, 1.0, quiet), WIDEST2);
+        assert_eq!(model.widening(0.1, 0.0, quiet), 1.0);
+        // Large bias: the k-th nearest photon's radius.
+        assert_eq!(model.widening(100.0, 1.0, quiet), 1.0);
+        // Camera noise over the image holds the widening back.
+        assert!(model.widening(0.0, 1.0, noisy(300.0)) < model.widening(0.0, 1.0, noisy(3.0)));
+        assert_eq!(model.widening(0.0, 1.0, noisy(1e4)), 1.0);
+    }
+
+    /// Pixels pool their window: a flat region widens, a biased one does not, unmeasured
+    /// pixels keep their radius, and the result does not depend on anything but the spreads.
+    #[test]
+    fn windows_pool_their_pixels() {
+        let (w, h) = (64, 32);
+        let mut spreads = vec![Spread::default(); w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let biased = x >= w / 2;
+                // Noisy per-pixel estimates whose mean is 0 (left) or large (right).
+                let noise = if (x + y) % 2 == 0 { 0.05 } else { -0.05 };
+                let bias2 = if biased { 1.0 + noise } else { noise };
+                let room = if x == 6 && y == 6 { 2.0 } else { WIDEST2 };
+                spreads[y * w + x] =
+                    Spread { bias2, var: 1.0, camera: 0.0, room, measured: !(x == 3 && y == 3) };
+            }
+        }
+        let u = widenings(&spreads, w, 0.7);
+        // Widened nearly fully (what it costs the other pixels' passes holds it back a little).
+        assert!(u[5 * w + 5] > 0.9 * WIDEST2, "flat region: {}", u[5 * w + 5]);
+        assert_eq!(u[5 * w + w - 5], 1.0, "biased region");
+        assert_eq!(u[3 * w + 3], 1.0, "unmeasured pixel");
+        assert_eq!(u[6 * w + 6], 2.0, "a wall within the widest disc");
+        // Along a row: wide while the window holds flat pixels only, none once it is past the
+        // border into the biased half.
+        let row: Vec<f32> = (0..w).map(|x| u[16 * w + x]).collect();
+        assert!(row[..w / 2 - WINDOW].iter().all(|&u| u > 0.9 * WIDEST2), "{row:?}");
+        assert!(row[w / 2..].iter().all(|&u| u == 1.0), "{row:?}");
+    }
+}
