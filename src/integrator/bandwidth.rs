@@ -42,7 +42,11 @@
 //! RMSE rose 5 %). So a pixel
 //! widens only as far as its disc, `CLEAR` times wider for the next passes' visible points
 //! about the pilot's, stays on the part of its surface the measuring disc's probes found whole.
-//! `u` is at least 1 (the `k`-th nearest photon) and at most `WIDEST2`.
+//! `u` is at least 1 (the `k`-th nearest photon) and at most `WIDEST2` (and never past
+//! `--gather-radius`). A pixel that may not widen is not measured, and a measuring gather that
+//! meets more than twice the photons even light would put in its disc gives up (the light
+//! crowds there: not flat; a dim floor running on through a doorway onto a lit one made the
+//! doorway's pilot take 1.3 s, now 0.6 s, against 0.13 s without the measuring).
 
 use super::sppm::{for_each_flux, Footprint, CLEAR};
 use crate::accel::Accel;
@@ -109,11 +113,23 @@ impl Spread {
         rng: &mut Pcg32,
         c: &mut Counters,
     ) -> Spread {
+        let cap2 = gathers.indirect.max_radius * gathers.indirect.max_radius;
         let wide2 = MEASURE2 * r2;
+        if r2 >= cap2 {
+            return Spread::default();
+        }
         let wide = Footprint::probe(frame, &v.hit, ns, wide2, rng, c);
         // A surface narrower than the measured disc (the probes fell back on a smaller one), or
         // none of it: not measured.
         if wide.r2 != wide2 || wide.share <= 0.0 {
+            return Spread::default();
+        }
+        // Widening must not carry the disc over a wall or an edge (there the disc is cut off
+        // centre, its bias grows as the radius, not its square, and the two discs below
+        // understate it), nor past the largest gather radius asked for (`--gather-radius`).
+        let room = (wide.reach() * wide.reach() / (CLEAR * CLEAR * r2)).min(cap2 / r2).clamp(1.0, WIDEST2);
+        if room <= 1.0 {
+            // It may not widen at all: nothing to measure.
             return Spread::default();
         }
         let half = wide.half();
@@ -122,7 +138,11 @@ impl Spread {
         let mut first_sq = Vec3::ZERO;
         // The indirect maps only: caustics keep their radius (see `fluxes_within`).
         let none = Footprint::whole(0.0);
-        let m = for_each_flux(maps, gathers, v, ns, [&wide, &none], None, c, |flux, d2, _| {
+        // Where the photons crowd into the disc far beyond the `MEASURE2 k` of even light (a
+        // dim floor running on through a doorway onto a lit one), the light is not flat, and
+        // the pilot need not visit them all.
+        let most = (2.0 * MEASURE2) as u32 * gathers.indirect.k as u32;
+        let m = for_each_flux(maps, gathers, v, ns, [&wide, &none], None, Some(most), c, |flux, d2, _| {
             let sq = flux * flux;
             all.0 += flux;
             all.1 += sq;
@@ -134,7 +154,7 @@ impl Spread {
                 first_sq += sq;
             }
         });
-        if m == 0 || half.share <= 0.0 || first.share <= 0.0 {
+        if m.is_none_or(|m| m == 0) || half.share <= 0.0 || first.share <= 0.0 {
             return Spread::default();
         }
         let pi = std::f64::consts::PI as f32;
@@ -155,10 +175,6 @@ impl Spread {
         if !(bias2.is_finite() && var.is_finite()) {
             return Spread::default();
         }
-        // Widening must not carry the disc over a wall or an edge: there the disc is cut off
-        // centre, its bias grows as the radius (not its square) and the two discs above
-        // understate it.
-        let room = (wide.reach() * wide.reach() / (CLEAR * CLEAR * r2)).clamp(1.0, WIDEST2);
         Spread { bias2, var, camera: 0.0, room, measured: true }
     }
 }

@@ -505,7 +505,7 @@ pub(super) fn fluxes_within(
     let caustic_inner = inner.map(|_| caustic.half());
     let caustic_inner_r2 = caustic_inner.map_or(0.0, |f| f.r2);
     let (mut phi_c, mut phi_c_inner) = (Vec3::ZERO, Vec3::ZERO);
-    let m = for_each_flux(maps, gathers, v, ns, [footprint, &caustic], nearest, c, |flux, d2, is_caustic| {
+    let visit = |flux, d2, is_caustic| {
         if apart && is_caustic {
             phi_c += flux;
             if d2 < caustic_inner_r2 {
@@ -517,7 +517,8 @@ pub(super) fn fluxes_within(
                 phi_inner += flux;
             }
         }
-    });
+    };
+    let m = for_each_flux(maps, gathers, v, ns, [footprint, &caustic], nearest, None, c, visit).unwrap_or(0);
     if m == 0 {
         // Also where the footprint is empty (share 0: the visible point hemmed in by walls).
         return (Vec3::ZERO, Vec3::ZERO, 0);
@@ -551,7 +552,8 @@ pub(super) fn fluxes_within(
 /// visible point's throughput `β` and the footprint's share), its squared (flattened) distance
 /// and whether it is a caustic photon. Returns how many photons there were. With `nearest`
 /// (what [`first_radius2`] found at this visible point) the photons are taken from there
-/// instead of searched for.
+/// instead of searched for; else, with `most`, the search gives up past that many photons in a
+/// map and returns `None`.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn for_each_flux(
     maps: &PhotonMaps,
@@ -560,10 +562,11 @@ pub(super) fn for_each_flux(
     ns: Vec3,
     footprints: [&Footprint; 2],
     nearest: Option<&Nearest>,
+    most: Option<u32>,
     c: &mut Counters,
     mut visit: impl FnMut(Vec3, f32, bool),
-) -> u32 {
-    let mut m = 0u32;
+) -> Option<u32> {
+    let mut m = Some(0u32);
     let normals = v.hit.normals();
     let constant = normals.gather_constant(&v.m, v.wo);
     let indirect = maps.indirect.len();
@@ -580,10 +583,15 @@ pub(super) fn for_each_flux(
                 inside
             };
             let (p, r2) = (v.hit.p, footprint.r2);
-            m += match nearest {
-                Some(n) => map.for_each_found_inside(p, ns, r2, params, &n.found[i], each),
-                None => map.for_each_inside(p, ns, r2, params.flatten, each),
+            let found = match (nearest, most) {
+                (Some(n), _) => Some(map.for_each_found_inside(p, ns, r2, params, &n.found[i], each)),
+                (None, Some(most)) => map.for_each_inside_at_most(p, ns, r2, params.flatten, most, each),
+                (None, None) => Some(map.for_each_inside(p, ns, r2, params.flatten, each)),
             };
+            m = m.zip(found).map(|(a, b)| a + b);
+            if m.is_none() {
+                break;
+            }
         }
     });
     c.queries += (maps.indirect.len() + maps.caustic.len()) as u64;

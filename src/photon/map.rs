@@ -396,6 +396,26 @@ impl PhotonMap {
         count
     }
 
+    /// [`PhotonMap::for_each_inside`] giving up once more than `most` photons lie within the
+    /// region (counted or not): `None` then (some photons were offered to `f`, not all).
+    pub fn for_each_inside_at_most(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        r2: f32,
+        flatten: f32,
+        most: u32,
+        mut f: impl FnMut(Vec3, Vec3, Vec3, f32) -> bool,
+    ) -> Option<u32> {
+        let (mut count, mut within) = (0, 0u32);
+        self.tree.for_each_below_until(x, r2, flattened_metric(ns, flatten), |i, d2| {
+            count += self.offer(i, d2, x, ns, &mut f) as u32;
+            within += 1;
+            within > most
+        });
+        (within <= most).then_some(count)
+    }
+
     /// [`PhotonMap::for_each_inside`] over the photons that [`PhotonMap::knn_radius2_guessed`]
     /// found at the same `x` and `ns` with `params` (`found`, in the metric flattened by
     /// `params.flatten`): the same photons (in another order) without searching the tree again
@@ -639,6 +659,37 @@ mod tests {
                 let mean = sum / count as f64;
                 let bias = mean / expect as f64 - 1.0;
                 assert!(bias.abs() < 0.03, "k {k}, {kernel:?}: mean off by {:+.2}%", 100.0 * bias);
+            }
+        }
+    }
+
+    /// A query with a cap on the photons within its region is the plain query where they are
+    /// fewer, and gives up (`None`) where there are more, having offered no more than the cap
+    /// and one.
+    #[test]
+    fn a_capped_query_is_the_plain_one_or_gives_up() {
+        let hits = uniform_floor(20_000, 4.0, 3);
+        let map = PhotonMap::build(hits, MapColor::Rgb, 20_000);
+        let x = Vec3::new(2.0, 0.0, 2.0);
+        for r2 in [0.001f32, 0.01, 0.05] {
+            let mut plain = 0u32;
+            let all = map.for_each_inside(x, Vec3::Y, r2, 2.0, |_, _, _, _| {
+                plain += 1;
+                true
+            });
+            assert_eq!(all, plain);
+            for most in [all / 2, all, all + 10] {
+                let mut offered = 0u32;
+                let capped = map.for_each_inside_at_most(x, Vec3::Y, r2, 2.0, most, |_, _, _, _| {
+                    offered += 1;
+                    true
+                });
+                if all <= most {
+                    assert_eq!(capped, Some(all), "r² {r2}, cap {most}");
+                } else {
+                    assert_eq!(capped, None, "r² {r2}, cap {most}");
+                    assert!(offered <= most + 1, "offered {offered} past the cap {most}");
+                }
             }
         }
     }

@@ -297,6 +297,25 @@ impl<T: KdPoint> KdTree<T> {
         self.descend(p, limit, dist2, |index, d2, _| f(index as u32, d2));
     }
 
+    /// [`KdTree::for_each_below_with`] until `f` returns `true`: then the traversal stops.
+    pub fn for_each_below_until<F: Fn(Vec3) -> f32, G: FnMut(u32, f32) -> bool>(
+        &self,
+        p: Vec3,
+        limit: f32,
+        dist2: F,
+        mut f: G,
+    ) {
+        if limit.is_nan() || limit <= 0.0 {
+            return;
+        }
+        // A limit of 0 leaves no item and no subtree below it.
+        self.descend(p, limit, dist2, |index, d2, limit| {
+            if f(index as u32, d2) {
+                *limit = 0.0;
+            }
+        });
+    }
+
     /// The traversal every query shares: calls `visit(index, d2, &mut limit)` for every item
     /// whose metric `d2 = dist2(item - p)` is strictly below the running `limit`, nearer
     /// subtrees first; `visit` may shrink the limit (a k-NN heap that filled up), and subtrees
