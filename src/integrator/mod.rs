@@ -68,7 +68,7 @@ pub fn render<A: Accel>(
             passes::run(cfg, control, progress, &mut stats, &mut sppm)
         }
         Integrator::PassIndexed(c) => {
-            let mut pppm = pppm::PassIndexed::new(frame, c, analysis);
+            let mut pppm = pppm::PassIndexed::new(frame, c, analysis, bandwidth::pays(cfg));
             passes::run(cfg, control, progress, &mut stats, &mut pppm)
         }
         Integrator::Path(c) => {

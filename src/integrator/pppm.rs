@@ -53,12 +53,21 @@ pub struct PassIndexed<'f, 'a, A: Accel> {
     gathers: GatherPair,
     /// Each pixel's first radius, once the first pass has made it.
     pilot: Option<Vec<FirstPoint>>,
+    /// Whether the pilot widens the first radii where the light is flat (a long render's).
+    widen: bool,
 }
 
 impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
-    pub fn new(frame: &'f Frame<'a, A>, cfg: &'f ProgressiveConfig, analysis: &'f Analysis) -> Self {
+    /// `widen`: whether the pilot widens the first radii where the light is flat
+    /// ([`super::bandwidth::pays`]).
+    pub fn new(
+        frame: &'f Frame<'a, A>,
+        cfg: &'f ProgressiveConfig,
+        analysis: &'f Analysis,
+        widen: bool,
+    ) -> Self {
         let gathers = GatherPair::with_footprint(&cfg.gathers, frame.scene);
-        PassIndexed { frame, cfg, analysis, gathers, pilot: None }
+        PassIndexed { frame, cfg, analysis, gathers, pilot: None, widen }
     }
 
     /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
@@ -74,13 +83,15 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         stats: &mut Stats,
         progress: &dyn Progress,
     ) -> (Vec<FirstPoint>, Counters) {
-        let PassIndexed { frame, cfg, analysis, gathers, .. } = self;
+        let PassIndexed { frame, cfg, analysis, gathers, widen, .. } = self;
+        let widen = *widen;
         let samples = PixelSamples { spp, first: 0, seed: render_seed };
         let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
         let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
         let camera = &frame.camera;
         let width = camera.width as usize;
         let mut found = vec![Found::default(); width * camera.height as usize];
+        let widen_all = widen;
         let ((points, summary), c) = stats.run("pilot", "", |_| {
             let (_, mut c) = for_each_pixel(
                 width,
@@ -88,22 +99,28 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 pass.seed,
                 &Quiet,
                 |x, y, found, rng, scratch: &mut Scratch, c| {
-                    let camera = camera_samples_variance(frame, cfg, &pass, x, y, &mut scratch.batch, rng, c);
+                    let camera = if widen {
+                        camera_samples_variance(frame, cfg, &pass, x, y, &mut scratch.batch, rng, c)
+                    } else {
+                        0.0
+                    };
                     found.spread.camera = camera;
                     let Some(v) = visible_point(frame, cfg, &pass, x, y, rng, c) else { return Vec3::ZERO };
                     let ns = face_forward(v.hit.n, v.wo);
                     if let Some(r2) =
                         first_radius2(&maps, gathers, (x, y), v.hit.p, ns, &mut scratch.nearest, c)
                     {
-                        let spread = Spread::measure(frame, &maps, gathers, &v, ns, r2, rng, c);
                         found.point = Some((v.hit, ns, r2));
-                        found.spread = Spread { camera, ..spread };
+                        if widen {
+                            let spread = Spread::measure(frame, &maps, gathers, &v, ns, r2, rng, c);
+                            found.spread = Spread { camera, ..spread };
+                        }
                     }
                     Vec3::ZERO
                 },
             );
             let spreads: Vec<Spread> = found.iter().map(|f| f.spread).collect();
-            let widen = widenings(&spreads, width, cfg.alpha);
+            let widen = if widen { widenings(&spreads, width, cfg.alpha) } else { vec![1.0; spreads.len()] };
             // Each point's surface probed about its widened radius (a seed of its own: the
             // pixels' first seed drew their visible points).
             let mut states: Vec<(Found, f32, FirstPoint)> =
@@ -119,18 +136,23 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 });
             c += probing;
             let points = states.into_iter().map(|(_, _, point)| point).collect();
-            ((points, summary(&widen, &spreads)), c)
+            ((points, widen_all.then(|| summary(&widen, &spreads))), c)
         });
         if let Some(stage) = stats.stages.last_mut() {
+            let how = match summary {
+                Some(w) => format!(
+                    "widened {:.2}x on average where the light is flat ({:.0} % of the {} pixels measured fully, 2x)",
+                    w.mean,
+                    100.0 * w.widest,
+                    w.pixels
+                ),
+                None => "not widened (a short render: fewer than 16 passes, or under 10 s)".to_string(),
+            };
             stage.reason = format!(
-                "each pixel's first radius, from a pass of its own seed: the k-th nearest photon's, widened \
-                 {:.2}x on average where the light is flat ({:.0} % of the {} pixels measured fully, 2x)",
-                summary.mean,
-                100.0 * summary.widest,
-                summary.pixels
+                "each pixel's first radius, from a pass of its own seed: the k-th nearest photon's, {how}"
             );
         }
-        stats.widening = Some(summary);
+        stats.widening = summary;
         (points, c)
     }
 }
