@@ -31,8 +31,7 @@ use super::bandwidth::{radius2_scale, summary, widenings, Spread};
 use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use super::sppm::{
-    camera_samples, camera_samples_variance, first_radius2, fluxes_within, pass_maps, visible_point,
-    FirstPoint, Scratch,
+    camera_samples, first_radius2, fluxes_within, pass_maps, visible_point, FirstPoint, Scratch,
 };
 use crate::accel::Accel;
 use crate::config::ProgressiveConfig;
@@ -100,7 +99,7 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 &Quiet,
                 |x, y, found, rng, scratch: &mut Scratch, c| {
                     let camera = if widen {
-                        camera_samples_variance(frame, cfg, &pass, x, y, &mut scratch.batch, rng, c)
+                        camera_samples(frame, cfg, &pass, x, y, &mut scratch.batch, rng, c).1
                     } else {
                         0.0
                     };
@@ -196,7 +195,7 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                 pass.seed,
                 progress,
                 |x, y, probe, rng, scratch: &mut Scratch, c| {
-                    let mut l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
+                    let (mut l, _) = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) else { return l };
                     if maps.indirect.is_empty() && maps.caustic.is_empty() {
                         return l;

@@ -105,7 +105,7 @@ impl<A: Accel> PassRenderer for Progressive<'_, '_, A> {
                 pass.seed,
                 progress,
                 |x, y, st, rng, scratch: &mut Scratch, c| {
-                    let l = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
+                    let (l, _) = camera_samples(frame, cfg, pass, x, y, &mut scratch.batch, rng, c);
                     if let Some(v) = visible_point(frame, cfg, pass, x, y, rng, c) {
                         let nearest = &mut scratch.nearest;
                         gather(frame, &maps, gathers, (x, y), st, &v, cfg.alpha, nearest, rng, c);
@@ -179,7 +179,9 @@ pub(super) fn pass_maps<A: Accel>(
     maps
 }
 
-/// The mean emission and direct light of pixel `(x, y)`'s camera samples in `pass`.
+/// The mean emission and direct light of pixel `(x, y)`'s camera samples in `pass`, and the
+/// variance of that mean from the samples' own spread (summed over the channels; 0 with fewer
+/// than two finite samples).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn camera_samples<A: Accel>(
     frame: &Frame<'_, A>,
@@ -190,44 +192,26 @@ pub(super) fn camera_samples<A: Accel>(
     batch: &mut CameraBatch,
     rng: &mut Pcg32,
     c: &mut Counters,
-) -> Vec3 {
+) -> (Vec3, f64) {
     frame.camera_rays(&pass.samples, x, y, batch, c);
     let mut mean = SampleMean::default();
-    for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
-        mean.add(trace_camera(frame, cfg, *ray, *hit, rng, c), c);
-    }
-    mean.mean()
-}
-
-/// The variance of pixel `(x, y)`'s mean over its camera samples in `pass` (emission and
-/// direct light; summed over the channels), from the samples' own spread.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn camera_samples_variance<A: Accel>(
-    frame: &Frame<'_, A>,
-    cfg: &ProgressiveConfig,
-    pass: &Pass,
-    x: u32,
-    y: u32,
-    batch: &mut CameraBatch,
-    rng: &mut Pcg32,
-    c: &mut Counters,
-) -> f64 {
-    frame.camera_rays(&pass.samples, x, y, batch, c);
     let (mut sum, mut sq, mut n) = (Vec3::ZERO, Vec3::ZERO, 0u32);
     for (ray, hit) in batch.rays.iter().zip(&batch.hits) {
         let l = trace_camera(frame, cfg, *ray, *hit, rng, c);
+        mean.add(l, c);
         if l.is_finite() {
             sum += l;
             sq += l * l;
             n += 1;
         }
     }
+    let mean = mean.mean();
     if n < 2 {
-        return 0.0;
+        return (mean, 0.0);
     }
     let n = n as f64;
     let var: f64 = (0..3).map(|i| (sq[i] as f64 - (sum[i] as f64).powi(2) / n) / (n - 1.0)).sum();
-    var.max(0.0) / n
+    (mean, var.max(0.0) / n)
 }
 
 /// Follows a camera sample through mirrors and glass: the emission seen and the direct light

@@ -291,10 +291,10 @@ impl<T: KdPoint> KdTree<T> {
         dist2: F,
         mut f: G,
     ) {
-        if limit.is_nan() || limit <= 0.0 {
-            return;
-        }
-        self.descend(p, limit, dist2, |index, d2, _| f(index as u32, d2));
+        self.for_each_below_until(p, limit, dist2, |index, d2| {
+            f(index, d2);
+            false
+        });
     }
 
     /// [`KdTree::for_each_below_with`] until `f` returns `true`: then the traversal stops.
