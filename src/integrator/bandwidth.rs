@@ -232,7 +232,7 @@ pub(super) fn widenings(spreads: &[Spread], width: usize, alpha: f32) -> Vec<f32
     // image's mean variance, which depends on every choice; a few rounds settle it.
     for _ in 0..ROUNDS {
         let image = model.image(spreads, &out);
-        let next: Vec<f32> = spreads
+        out = spreads
             .iter()
             .zip(&pooled)
             .map(
@@ -245,7 +245,6 @@ pub(super) fn widenings(spreads: &[Spread], width: usize, alpha: f32) -> Vec<f32
                 },
             )
             .collect();
-        out = next;
     }
     out
 }

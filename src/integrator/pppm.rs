@@ -82,15 +82,14 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         stats: &mut Stats,
         progress: &dyn Progress,
     ) -> (Vec<FirstPoint>, Counters) {
-        let PassIndexed { frame, cfg, analysis, gathers, widen, .. } = self;
-        let widen = *widen;
+        let PassIndexed { frame, cfg, analysis, gathers, .. } = self;
+        let widen = self.widen;
         let samples = PixelSamples { spp, first: 0, seed: render_seed };
         let pass = Pass { index: 0, seed: derive_seed(render_seed, 0x911070, 0), samples };
         let maps = pass_maps(frame, cfg, analysis, &pass, stats, progress);
         let camera = &frame.camera;
         let width = camera.width as usize;
         let mut found = vec![Found::default(); width * camera.height as usize];
-        let widen_all = widen;
         let ((points, summary), c) = stats.run("pilot", "", |_| {
             let (_, mut c) = for_each_pixel(
                 width,
@@ -119,11 +118,12 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 },
             );
             let spreads: Vec<Spread> = found.iter().map(|f| f.spread).collect();
-            let widen = if widen { widenings(&spreads, width, cfg.alpha) } else { vec![1.0; spreads.len()] };
+            let widening =
+                if widen { widenings(&spreads, width, cfg.alpha) } else { vec![1.0; spreads.len()] };
             // Each point's surface probed about its widened radius (a seed of its own: the
             // pixels' first seed drew their visible points).
             let mut states: Vec<(Found, f32, FirstPoint)> =
-                found.iter().zip(&widen).map(|(f, u)| (*f, *u, FirstPoint::default())).collect();
+                found.iter().zip(&widening).map(|(f, u)| (*f, *u, FirstPoint::default())).collect();
             let seed = derive_seed(pass.seed, 0x911070, 1);
             let (_, probing) =
                 for_each_pixel(width, &mut states, seed, &Quiet, |_, _, state, rng, _: &mut (), c| {
@@ -135,7 +135,7 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 });
             c += probing;
             let points = states.into_iter().map(|(_, _, point)| point).collect();
-            ((points, widen_all.then(|| summary(&widen, &spreads))), c)
+            ((points, widen.then(|| summary(&widening, &spreads))), c)
         });
         if let Some(stage) = stats.stages.last_mut() {
             let how = match summary {

@@ -486,7 +486,7 @@ pub(super) fn fluxes_within(
     // The caustic maps' own discs, where narrower.
     let apart = narrow < 1.0 && !maps.caustic.is_empty();
     let caustic = if apart { footprint.within(narrow) } else { *footprint };
-    let caustic_inner = inner.map(|_| caustic.half());
+    let caustic_inner = inner.filter(|_| apart).map(|_| caustic.half());
     let caustic_inner_r2 = caustic_inner.map_or(0.0, |f| f.r2);
     let (mut phi_c, mut phi_c_inner) = (Vec3::ZERO, Vec3::ZERO);
     let visit = |flux, d2, is_caustic| {
@@ -509,7 +509,7 @@ pub(super) fn fluxes_within(
     }
     // Flux over a footprint of `share` of a disc of `narrow` times the area, as over the whole
     // of the wider disc.
-    let scaled = |flux: Vec3, share: f32, narrow: f32| {
+    let scaled = |flux: Vec3, share: f32| {
         if share > 0.0 {
             flux / (share * narrow)
         } else {
@@ -519,13 +519,13 @@ pub(super) fn fluxes_within(
     let inner = match inner {
         Some(f) if f.share > 0.0 && apart => {
             let c_share = caustic_inner.map_or(0.0, |f| f.share);
-            v.beta * (phi_inner / f.share + scaled(phi_c_inner, c_share, narrow))
+            v.beta * (phi_inner / f.share + scaled(phi_c_inner, c_share))
         }
         Some(f) if f.share > 0.0 => v.beta * phi_inner / f.share,
         _ => Vec3::ZERO,
     };
     if apart {
-        return (v.beta * (phi / footprint.share + scaled(phi_c, caustic.share, narrow)), inner, m);
+        return (v.beta * (phi / footprint.share + scaled(phi_c, caustic.share)), inner, m);
     }
     (v.beta * phi / footprint.share, inner, m)
 }
