@@ -48,7 +48,9 @@
 //! crowds there: not flat; a dim floor running on through a doorway onto a lit one made the
 //! doorway's pilot take 1.3 s, now 0.6 s, against 0.13 s without the measuring).
 
-use super::sppm::{for_each_flux, Footprint, CLEAR};
+use super::probe;
+use super::sppm::{for_each_flux, CLEAR};
+use crate::photon::footprint::Footprint;
 use crate::accel::Accel;
 use crate::config::RenderConfig;
 use crate::frame::specular::Landing;
@@ -131,7 +133,7 @@ impl Spread {
         if r2 >= cap2 {
             return Spread::default();
         }
-        let wide = Footprint::probe(frame, &v.hit, ns, wide2, rng, c);
+        let wide = probe::probe(frame, &v.hit, ns, wide2, rng, c);
         // A surface narrower than the measured disc (the probes fell back on a smaller one), or
         // none of it: not measured.
         if wide.r2 != wide2 || wide.share <= 0.0 {

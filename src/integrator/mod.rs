@@ -13,6 +13,7 @@ pub mod passes;
 pub mod path;
 pub mod photon;
 pub mod pppm;
+pub mod probe;
 pub mod sppm;
 
 pub use passes::{Checkpoint, Control};

@@ -42,13 +42,14 @@ use crate::frame::direct::direct_light;
 use crate::frame::specular::{walk, Landing, Start};
 use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Part, Progress};
-use crate::geometry::{offset_ray_origin, Ray};
+use crate::geometry::Ray;
 use crate::material::face_forward;
+use super::probe;
+use crate::photon::footprint::Footprint;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
 use crate::stats::Stats;
-use glam::{Vec2, Vec3};
-use rand::Rng;
+use glam::Vec3;
 use rand_pcg::Pcg32;
 
 /// A pixel's progressive statistics (the emission and direct light, averaged over passes like
@@ -358,7 +359,7 @@ impl FirstPoint {
     ) -> FirstPoint {
         let r2 = r2 * widening;
         let wide = CLEAR * CLEAR * r2;
-        let clear2 = if Footprint::clear(frame, hit, n, wide, rng, c) { wide } else { 0.0 };
+        let clear2 = if probe::clear(frame, hit, n, wide, rng, c) { wide } else { 0.0 };
         FirstPoint { p: hit.p, n, r2, clear2, narrow: 1.0 / widening }
     }
 
@@ -387,7 +388,7 @@ impl FirstPoint {
         if self.radius2_at(v.hit.p, ns).is_some() && self.clears(v.hit.p, r2) {
             Footprint::whole(r2)
         } else {
-            Footprint::probe(frame, &v.hit, ns, r2, rng, c)
+            probe::probe(frame, &v.hit, ns, r2, rng, c)
         }
     }
 
@@ -582,271 +583,6 @@ pub(super) fn for_each_flux(
     m
 }
 
-/// Directions in which a visible point probes its surface, evenly spaced around it.
-pub(super) const PROBES: usize = 8;
-
-/// The least part of its own disc a footprint is taken to fill (see [`Footprint::probe`]).
-const LEAST_SHARE: f32 = 1.0 / 16.0;
-
-/// The part of a gather disc that the visible point's own surface fills, as far as rays cast
-/// down onto the surface can tell: the disc cut back by the walls standing on the surface and
-/// by the edges where it ends.
-///
-/// Where a wall stands on the surface within the gather radius (a room's corners and edges, a
-/// block on the floor, a thin wall standing on it), or the surface ends (a block's top, a
-/// slab's edge), the disc reaches past it: its part beyond holds no photons of this surface, so
-/// photons over `π r²` made every edge too dark (by a missing strip about 0.15 r wide with the
-/// flattened disc), and it may hold photons of the surface on a thin wall's far side (light
-/// leaked under the wall).
-///
-/// In each of `PROBES` evenly spaced directions, turned by a random angle, a ray from a point
-/// `r / √8` above the visible point (the flattened disc's half thickness) is aimed at the
-/// surface where the disc's rim should be, and goes on to as deep below it. It meets a wall (a
-/// surface at more than 60° to this one) at or before the rim: the footprint ends at the
-/// wall's foot (pulled back by `r / 1000`, so that the wall's own photons, over its foot, stay
-/// out). It meets a surface (within 60°) there: the surface reaches the rim in that direction.
-/// It meets nothing, or a wall beyond the rim: the surface ends before the rim, and the aim is
-/// halved (then moved a quarter back out if that finds it), two more rays at most. The
-/// footprint is the disc within the polygon of the probes' end points; photons count only
-/// over it and the estimate divides by its area (`share` of the disc's). Every end point lies
-/// on the surface, so on a surface bounded by straight walls and convex edges the polygon
-/// stays on it, whatever the number of probes, and the photons counted and the area agree
-/// exactly; what it does not see are walls and edges between two probes that miss them.
-#[derive(Clone, Copy)]
-pub(super) struct Footprint {
-    /// Tangent frame: the polygon's coordinates are along these.
-    t: [Vec3; 2],
-    /// The angle of the first probe.
-    theta0: f32,
-    /// The probes' end points, counter-clockwise, in the tangent frame.
-    ends: [Vec2; PROBES],
-    /// Whether some probe ended inside the rim (otherwise the footprint is the whole disc).
-    cut: bool,
-    /// The squared radius of the disc the footprint is cut from: the one asked for, or a
-    /// sixteenth or a 256th of it where little of the larger disc lies on the surface and the
-    /// smaller footprint is the larger.
-    pub r2: f32,
-    /// The footprint's area over the area `π r²` of the disc asked for, in `[0, 1]`.
-    pub share: f32,
-}
-
-/// What a probe found along one direction.
-enum Reach {
-    /// The surface reaches this far (as aimed).
-    Surface,
-    /// A wall stands on the surface at this distance.
-    Wall(f32),
-    /// The surface ends before the aim.
-    Edge,
-}
-
-impl Footprint {
-    /// The whole disc of squared radius `r2`.
-    pub fn whole(r2: f32) -> Self {
-        Footprint {
-            t: [Vec3::X, Vec3::Y],
-            theta0: 0.0,
-            ends: [Vec2::ZERO; PROBES],
-            cut: false,
-            r2,
-            share: 1.0,
-        }
-    }
-
-    /// Probes the surface of `hit` (unit normal `ns` on the viewer's side) within the squared
-    /// radius `r2`. Where less than a quarter of the disc lies on the surface (a strip narrower
-    /// than the disc, such as the side of a thin slab), the footprint is also cut from a disc
-    /// of a quarter of the radius, and again if need be, and the largest kept: an estimate over
-    /// a small footprint is noisy, but skipping it would leave such surfaces dark. Eight probes
-    /// keep two in the open quarter of a right-angled corner, so that a footprint there is
-    /// never less than an eighth of the disc (with six, one probe in it made the footprint
-    /// vanish: nothing counted there, or, cut from ever smaller discs, a few photons weighted
-    /// by thousands).
-    pub fn probe<A: Accel>(
-        frame: &Frame<'_, A>,
-        hit: &SurfaceHit,
-        ns: Vec3,
-        r2: f32,
-        rng: &mut Pcg32,
-        c: &mut Counters,
-    ) -> Self {
-        let mut fp = Footprint::cut_from(frame, hit, ns, r2, rng, c);
-        let mut shrink = 1.0;
-        while fp.share < 0.25 && shrink < 256.0 {
-            shrink *= 16.0;
-            let small = Footprint::cut_from(frame, hit, ns, r2 / shrink, rng, c);
-            // The largest footprint, for the most photons: near a corner the smaller disc is cut
-            // the same way (and would only be noisier), in a narrow strip it is cut far less.
-            if small.share / shrink > fp.share {
-                fp = Footprint { share: small.share / shrink, ..small };
-            }
-        }
-        // A footprint filling almost none of its own disc (a visible point on the very edge
-        // where two surfaces meet, whose lifted probe origin lands past the other surface) would
-        // weigh its few photons by thousands: a pixel of the Cornell box's top edge came out 9,000
-        // times too bright in one pass at k = 60. Its area is taken as no less than
-        // `LEAST_SHARE` of the disc: a bounded weight, and a little light lost on such points.
-        let least = LEAST_SHARE * fp.r2 / r2;
-        if fp.share < least {
-            fp.share = least;
-        }
-        fp
-    }
-
-    /// Whether the probes find the surface of `hit` filling the whole disc of squared radius
-    /// `r2` (no wall standing on it and no edge within it).
-    pub fn clear<A: Accel>(
-        frame: &Frame<'_, A>,
-        hit: &SurfaceHit,
-        ns: Vec3,
-        r2: f32,
-        rng: &mut Pcg32,
-        c: &mut Counters,
-    ) -> bool {
-        !Footprint::cut_from(frame, hit, ns, r2, rng, c).cut
-    }
-
-    /// The footprint within the disc of squared radius `r2`.
-    fn cut_from<A: Accel>(
-        frame: &Frame<'_, A>,
-        hit: &SurfaceHit,
-        ns: Vec3,
-        r2: f32,
-        rng: &mut Pcg32,
-        c: &mut Counters,
-    ) -> Self {
-        let r = r2.sqrt();
-        let step = std::f32::consts::TAU / PROBES as f32;
-        // The polygon of probes that reach the rim circumscribes the disc.
-        let far = r / (0.5 * step).cos();
-        let lift = r * std::f32::consts::FRAC_1_SQRT_2 * 0.5;
-        let (t1, t2) = ns.any_orthonormal_pair();
-        let theta0 = rng.gen::<f32>() * step;
-        let origin = offset_ray_origin(hit.p, hit.err, ns) + lift * ns;
-        let mut probe = |t: Vec3, aim: f32| {
-            c.rays.gather += 1;
-            // At parameter 1 the ray reaches the surface's plane at `aim`, at 2 as far below.
-            let ray = Ray::segment(origin, aim * t - lift * ns, 0.0, 2.0);
-            match frame.trace(&ray, c) {
-                None => Reach::Edge,
-                Some(h) => {
-                    let along = (h.p - hit.p).dot(t);
-                    if h.n.dot(ns).abs() >= 0.5 {
-                        Reach::Surface
-                    } else if along <= aim {
-                        Reach::Wall(along)
-                    } else {
-                        Reach::Edge
-                    }
-                }
-            }
-        };
-        let mut ends = [Vec2::ZERO; PROBES];
-        let mut cut = false;
-        for (j, end) in ends.iter_mut().enumerate() {
-            let (sin, cos) = (theta0 + step * j as f32).sin_cos();
-            let t = cos * t1 + sin * t2;
-            let reach = match probe(t, far) {
-                Reach::Surface => far,
-                Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
-                Reach::Edge => match probe(t, 0.5 * far) {
-                    Reach::Surface => match probe(t, 0.75 * far) {
-                        Reach::Surface => 0.75 * far,
-                        Reach::Wall(d) => (d - 1e-3 * r).max(0.5 * far),
-                        Reach::Edge => 0.5 * far,
-                    },
-                    Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
-                    Reach::Edge => match probe(t, 0.25 * far) {
-                        Reach::Surface => 0.25 * far,
-                        Reach::Wall(d) => (d - 1e-3 * r).max(0.0),
-                        Reach::Edge => 0.0,
-                    },
-                },
-            };
-            cut |= reach < far;
-            *end = Vec2::new(cos, sin) * reach;
-        }
-        if !cut {
-            return Footprint::whole(r2);
-        }
-        let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
-        let share = (area / (std::f32::consts::PI * r2)).clamp(0.0, 1.0);
-        Footprint { t: [t1, t2], theta0, ends, cut, r2, share }
-    }
-
-    /// The footprint over the same surface within the disc of half the area (squared radius
-    /// `r2 / 2`), its `share` likewise of half the disc this one's `share` is of (the requested
-    /// one, before any shrinking in [`Footprint::probe`]), so that flux over `share` estimates
-    /// the same radiance over `π r² / 2` as over `π r²`, less the bias of the larger disc.
-    pub fn half(&self) -> Footprint {
-        self.within(0.5)
-    }
-
-    /// The footprint over the same surface within the disc of `fraction` (in `(0, 1]`) of the
-    /// area, its `share` of that disc (as [`Footprint::half`]).
-    pub fn within(&self, fraction: f32) -> Footprint {
-        let r2 = fraction * self.r2;
-        if !self.cut {
-            return Footprint { r2, ..*self };
-        }
-        let area = |r: f32| -> f32 {
-            (0..PROBES).map(|j| wedge_area(self.ends[j], self.ends[(j + 1) % PROBES], r)).sum()
-        };
-        let outer = area(self.r2.sqrt());
-        let ratio = if outer > 0.0 { area(r2.sqrt()) / outer } else { 0.0 };
-        Footprint { r2, share: (self.share / fraction * ratio).clamp(0.0, 1.0), ..*self }
-    }
-
-    /// How far from the visible point the surface was found whole: the nearest of the probes'
-    /// end points where a wall or an edge cut the disc, else the disc's radius.
-    pub fn reach(&self) -> f32 {
-        if !self.cut {
-            return self.r2.sqrt();
-        }
-        self.ends.iter().map(|e| e.length()).fold(f32::INFINITY, f32::min)
-    }
-
-    /// Whether a photon at `offset` from the visible point lies over the footprint (its
-    /// distance is the caller's test).
-    #[inline]
-    pub fn contains(&self, offset: Vec3) -> bool {
-        if !self.cut {
-            return true;
-        }
-        let q = Vec2::new(offset.dot(self.t[0]), offset.dot(self.t[1]));
-        let step = std::f32::consts::TAU / PROBES as f32;
-        let angle = (q.y.atan2(q.x) - self.theta0).rem_euclid(std::f32::consts::TAU);
-        let j = ((angle / step) as usize).min(PROBES - 1);
-        let (a, b) = (self.ends[j], self.ends[(j + 1) % PROBES]);
-        (b - a).perp_dot(q - a) > 0.0
-    }
-}
-
-/// The area of the disc of radius `r` about the origin within the triangle (origin, `a`, `b`),
-/// `b` counter-clockwise from `a` by less than a half turn: the triangle's part of the segment
-/// `a b` inside the disc, and circular sectors where it runs outside.
-fn wedge_area(a: Vec2, b: Vec2, r: f32) -> f32 {
-    let sector = |u: Vec2, v: Vec2| 0.5 * r * r * u.perp_dot(v).atan2(u.dot(v));
-    let d = b - a;
-    let (qa, qb, qc) = (d.dot(d), a.dot(d), a.dot(a) - r * r);
-    let disc = qb * qb - qa * qc;
-    if qa <= 0.0 || disc <= 0.0 {
-        return if qa <= 0.0 { 0.0 } else { sector(a, b) };
-    }
-    let s = disc.sqrt();
-    let t0 = ((-qb - s) / qa).clamp(0.0, 1.0);
-    let t1 = ((-qb + s) / qa).clamp(0.0, 1.0);
-    if t0 >= t1 {
-        return sector(a, b);
-    }
-    let (p0, p1) = (a + t0 * d, a + t1 * d);
-    // Outside the disc before `t0` and after `t1` (tested, not computed: the angle between a
-    // point and itself, as `-0.0` and a rounded `0.0`, would be atan2(0, -0) = π).
-    let before = if t0 > 0.0 { sector(a, p0) } else { 0.0 };
-    let after = if t1 < 1.0 { sector(p1, b) } else { 0.0 };
-    before + 0.5 * p0.perp_dot(p1) + after
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -870,116 +606,5 @@ mod tests {
         assert!(!first.clears(Vec3::new(0.051, 0.0, 0.0), 0.01));
         assert!(first.clears(Vec3::new(0.09, 0.0, 0.0), 0.0025 * 0.99));
         assert!(!FirstPoint { clear2: 0.0, ..first }.clears(Vec3::ZERO, 1e-6));
-    }
-
-    /// A visible point on the very edge where a wall meets the ceiling, a hair above the
-    /// ceiling's plane (as rounding put one on the Cornell box's top edge), lifts its probes'
-    /// origin past the ceiling: every probe meets the ceiling's back at once and the footprint
-    /// fills next to nothing of its disc. Its photons must not be weighed by thousands (that
-    /// pixel came out 9,000 times too bright in one pass at k = 60).
-    #[test]
-    fn a_footprint_on_an_edge_weighs_its_photons_boundedly() {
-        use crate::accel::bvh::Bvh;
-        use crate::geometry::TriangleMesh;
-        use crate::light::LightSet;
-        use crate::material::Material;
-        use crate::scene::{Camera, Scene, SceneCamera};
-        // A wall x = 1 and a ceiling y = 1 meeting along an edge (two-sided diffuse).
-        let positions = vec![
-            Vec3::new(1.0, -1.0, -1.0),
-            Vec3::new(1.0, 1.0, -1.0),
-            Vec3::new(1.0, 1.0, 1.0),
-            Vec3::new(1.0, -1.0, 1.0),
-            Vec3::new(-1.0, 1.0, -1.0),
-            Vec3::new(-1.0, 1.0, 1.0),
-        ];
-        let indices = vec![[0, 1, 2], [0, 2, 3], [4, 1, 2], [4, 2, 5]];
-        let cam = Camera::look_at(Vec3::ZERO, Vec3::X, Vec3::Y, 60.0, 8, 8).unwrap();
-        let scene = Scene {
-            path: "edge".into(),
-            camera: cam,
-            cameras: vec![SceneCamera::still("camera", cam)],
-            mesh: TriangleMesh { positions, indices },
-            attributes: Default::default(),
-            tri_material: vec![0; 4],
-            materials: vec![Material::Diffuse { kd: Vec3::splat(0.5) }],
-            maps: vec![Default::default()],
-            textured: false,
-            textures: Default::default(),
-            warnings: Vec::new(),
-            material_names: vec!["white".into()],
-            lights: Vec::new(),
-            portals: Vec::new(),
-            render: Default::default(),
-        };
-        let accel = Bvh::build(&scene.mesh);
-        let lights = LightSet::new(&scene.lights, &scene.mesh, &scene.tri_material, &scene.materials);
-        let frame = Frame {
-            scene: &scene,
-            accel: &accel,
-            lights: &lights,
-            camera: cam,
-            views: std::slice::from_ref(&cam),
-        };
-        // The wall x = 1 (facing -x), its point on the edge with the ceiling y = 1.
-        let ray = Ray::new(Vec3::new(0.0, 1.0 - 1e-3, 0.0), Vec3::X);
-        let mut c = Counters::default();
-        let mut hit = frame.trace(&ray, &mut c).expect("the wall");
-        hit.p = Vec3::new(1.0, 1.0 + 2e-6, 0.0);
-        let ns = -Vec3::X;
-        let r2 = 0.01;
-        let mut rng = Pcg32::seed_from_u64(5);
-        for _ in 0..20 {
-            let fp = Footprint::probe(&frame, &hit, ns, r2, &mut rng, &mut c);
-            let own = fp.share * r2 / fp.r2;
-            assert!(own >= LEAST_SHARE, "the footprint fills {own} of its disc");
-        }
-    }
-
-    /// The footprint's area (`share`) is the share of the disc where `contains` says yes, for
-    /// polygons of every kind (probes that reach the rim, stop at a wall, or find nothing), so
-    /// that photons counted and area divided by agree: the estimate's unbiasedness rests on it.
-    #[test]
-    fn footprint_area_matches_what_it_contains() {
-        let mut rng = Pcg32::seed_from_u64(3);
-        let r = 0.7f32;
-        let step = std::f32::consts::TAU / PROBES as f32;
-        let far = r / (0.5 * step).cos();
-        for case in 0..50 {
-            let theta0 = rng.gen::<f32>() * step;
-            let mut ends = [Vec2::ZERO; PROBES];
-            for (j, end) in ends.iter_mut().enumerate() {
-                let reach = match rng.gen_range(0..4) {
-                    0 => far,
-                    1 => 0.0,
-                    _ => rng.gen::<f32>() * far,
-                };
-                let (sin, cos) = (theta0 + step * j as f32).sin_cos();
-                *end = Vec2::new(cos, sin) * reach;
-            }
-            let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
-            let share = area / (std::f32::consts::PI * r * r);
-            let fp = Footprint { t: [Vec3::X, Vec3::Z], theta0, ends, cut: true, r2: r * r, share };
-            let n = 40_000;
-            let mut inside = 0;
-            for i in 0..n {
-                // Stratified in radius and angle over the disc.
-                let u = (i as f32 + 0.5) / n as f32;
-                let (rho, phi) = (r * u.sqrt(), rng.gen::<f32>() * std::f32::consts::TAU);
-                if fp.contains(Vec3::new(rho * phi.cos(), 0.3, rho * phi.sin())) {
-                    inside += 1;
-                }
-            }
-            let measured = inside as f32 / n as f32;
-            assert!((measured - share).abs() < 0.01, "case {case}: share {share}, contains {measured}");
-        }
-        // Every probe at the rim or beyond: the whole disc.
-        let full: f32 = (0..PROBES)
-            .map(|j| {
-                let (a, b) = (j as f32 * step, (j + 1) as f32 * step);
-                wedge_area(Vec2::new(a.cos(), a.sin()) * far, Vec2::new(b.cos(), b.sin()) * far, r)
-            })
-            .sum();
-        assert!((full / (std::f32::consts::PI * r * r) - 1.0).abs() < 1e-4, "{full}");
     }
 }

@@ -531,6 +531,25 @@ pub fn kernel_weight(kernel: Kernel, t2: f32) -> f32 {
     }
 }
 
+/// The kernel's weight within the disc of radius `t r` (`t` in `[0, 1]`) over its weight in
+/// the whole disc of radius `r`: `2 ∫₀ᵗ kernel_weight(s²) s ds` (box `t²`, cone `3t² − 2t³`,
+/// Gaussian in closed form), for estimates over part of a disc ([`super::footprint`]).
+#[inline]
+pub fn kernel_integral(kernel: Kernel, t: f32) -> f32 {
+    let t2 = t * t;
+    match kernel {
+        Kernel::Box => t2,
+        Kernel::Cone => t2 * (3.0 - 2.0 * t),
+        Kernel::Gaussian => {
+            const A: f32 = 0.918;
+            const B: f32 = 1.953;
+            const MEAN: f32 = 0.531_154_9;
+            let c = 1.0 / (1.0 - (-B).exp());
+            (A / MEAN) * ((1.0 - c) * t2 + c * (2.0 / B) * (1.0 - (-B * 0.5 * t2).exp()))
+        }
+    }
+}
+
 /// `n` photons scattered uniformly at random over the square `[0, side]²` of the floor `y = 0`,
 /// arriving straight down with `1 / n` W each (generator seeded `seed`): for tests of the
 /// estimates' means.
@@ -588,6 +607,24 @@ mod tests {
             }
             let expect = std::f64::consts::PI;
             assert!((integral - expect).abs() / expect < 0.01, "{kernel:?}: {integral}");
+        }
+    }
+
+    /// `kernel_integral` is the weight's integral out to `t r`, over the whole disc's.
+    #[test]
+    fn kernel_integrals_are_the_weights_integrals() {
+        for kernel in [Kernel::Box, Kernel::Cone, Kernel::Gaussian] {
+            for t in [0.0f64, 0.1, 0.35, 0.5, 0.8, 1.0] {
+                let n = 20000;
+                let integral: f64 = (0..n)
+                    .map(|i| {
+                        let s = t * (i as f64 + 0.5) / n as f64;
+                        2.0 * kernel_weight(kernel, (s * s) as f32) as f64 * s * t / n as f64
+                    })
+                    .sum();
+                let got = kernel_integral(kernel, t as f32) as f64;
+                assert!((got - integral).abs() < 1e-3, "{kernel:?} at {t}: {got} against {integral}");
+            }
         }
     }
 

@@ -32,6 +32,7 @@
 pub mod guide;
 pub mod irradiance;
 pub mod kdtree;
+pub mod footprint;
 pub mod map;
 pub mod pack;
 pub mod portal;
