@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generates the five hard test scenes: scenes/<name>/<name>.{toml,obj,mtl}.
+"""Generates the hard test scenes: scenes/<name>/<name>.{toml,obj,mtl}.
 
     python3 scripts/make_scenes.py [--bunny PATH] [NAME ...]
 
@@ -12,6 +12,8 @@ bunny      the Stanford bunny (69 451 triangles) in an open-front room, a point 
 glassknot  a (2,3) torus knot of glass (IOR 1.5, 20 000 triangles, closed) just above the floor
            of a Cornell room with a small bright light: caustics on the floor.
 faraway    the Cornell box x1000, moved to (1e4, -2e4, 3e4) with its camera.
+atrium     a two-storey arcaded courtyard (fluted columns, balustrades, banners) open to a black
+           sky, one small bright light over it; camera in a lower gallery.
 
 Deterministic, standard library only. Conventions of scenes/SCENES.md: metres, +Y up,
 counter-clockwise front faces (n = (v1 - v0) x (v2 - v0)), flat shading (no vn/vt), room walls
@@ -644,6 +646,145 @@ def glassknot():
 
 
 # ---------------------------------------------------------------------------------------------
+# atrium
+
+
+def box(part, lo, hi):
+    """The closed boundary of the box [lo, hi], facing outward."""
+    for axis in range(3):
+        axis_quad(part, axis, -1, lo[axis], lo, hi)
+        axis_quad(part, axis, 1, hi[axis], lo, hi)
+
+
+def fluted_column(part, cx, cz, r, y0, y1, sides=48, flutes=16, depth=0.06):
+    """A closed prism of `sides` sides around the vertical axis through (cx, cz), its radius
+    r (1 - depth (1 + cos(flutes a)) / 2): shallow flutes, as a classical column's."""
+    def p(k, y):
+        a = math.tau * k / sides
+        rr = r * (1.0 - depth * 0.5 * (1.0 + math.cos(flutes * a)))
+        return (cx + rr * math.cos(a), y, cz + rr * math.sin(a))
+
+    bottom, top = part.vertex((cx, y0, cz)), part.vertex((cx, y1, cz))
+    for k in range(sides):
+        part.quad(p(k + 1, y0), p(k, y0), p(k, y1), p(k + 1, y1))
+        a0, a1 = part.vertex(p(k, y0)), part.vertex(p(k + 1, y0))
+        b0, b1 = part.vertex(p(k, y1)), part.vertex(p(k + 1, y1))
+        part.tris += [(top, b1, b0), (bottom, a0, a1)]
+
+
+def atrium():
+    # A courtyard 14 m x 5 m open to a black sky, two storeys of arcades along its long sides
+    # with galleries behind: fluted columns below, pillars and balustrades above, banners
+    # hanging in the lower arches; one small bright light over the courtyard. Most surfaces the
+    # camera sees are lit by bounced light, in galleries, behind columns and between balusters
+    # whose size is that of a gather disc or less.
+    bays = [-5.0, -3.0, -1.0, 1.0, 3.0, 5.0]  # pillar and column centres along x
+    half = 0.25  # upper pillars 0.5 m wide
+    xs = [-7.3, -7.0] + [v for c in bays for v in (c - half, c + half)] + [7.0, 7.3]
+    ys = [-0.3, 0.0, 3.2, 4.0, 4.3, 7.0, 8.0, 8.3]
+    zs = [-5.1, -4.8, -2.8, -2.5, 2.5, 2.8, 4.8, 5.1]
+
+    def pillar(x):
+        return any(abs(x - c) < half for c in bays)
+
+    def solid(p):
+        x, y, z = p
+        az = abs(z)
+        if y < 0.0 or abs(x) > 7.0 or az > 4.8:
+            return True  # floor slab, end walls, back walls
+        if 2.5 < az < 2.8:  # the arcades: lintel bands, upper pillars; columns below are apart
+            return y > 3.2 and not (4.3 < y < 7.0 and not pillar(x))
+        if az > 2.8:  # the galleries: the upper floor and the roof
+            return 4.0 < y < 4.3 or 8.0 < y < 8.3
+        return False  # the courtyard
+
+    def material(axis, sign, empty):
+        if empty is None:
+            return "exterior"
+        if axis == 1:
+            return "floor" if sign > 0 else "ceiling"
+        return "stone"
+
+    shell = grid_solid(xs, ys, zs, solid, material, "atrium")
+    parts = [shell[m] for m in ("floor", "ceiling", "stone", "exterior")]
+    volume = check_closed(parts, "atrium shell")
+
+    columns = Part("columns", "column")
+    for c in bays:
+        for zc in (-2.65, 2.65):
+            piece = Part("column", "column")
+            box(piece, (c - 0.3, -0.05, zc - 0.3), (c + 0.3, 0.25, zc + 0.3))  # plinth
+            check_closed([piece], "plinth")
+            shaft = Part("shaft", "column")
+            fluted_column(shaft, c, zc, 0.22, 0.2, 2.95)
+            check_closed([shaft], "column shaft")
+            cap = Part("capital", "column")
+            box(cap, (c - 0.3, 2.9, zc - 0.3), (c + 0.3, 3.21, zc + 0.3))
+            for q in (piece, shaft, cap):
+                base = len(columns.verts)
+                columns.verts += q.verts
+                columns.tris += [(a + base, b + base, d + base) for a, b, d in q.tris]
+
+    # Balustrades in the upper arches: balusters 7 cm square every 18 cm, a rail on top.
+    rails = Part("balustrades", "column")
+    edges = [-7.0] + [v for c in bays for v in (c - half, c + half)] + [7.0]
+    balusters = 0
+    for lo_x, hi_x in zip(edges[0::2], edges[1::2]):
+        n = int((hi_x - lo_x) / 0.18)
+        step = (hi_x - lo_x) / n
+        for zc in (-2.65, 2.65):
+            q = Part("rail", "column")
+            box(q, (lo_x - 0.01, 5.1, zc - 0.1), (hi_x + 0.01, 5.22, zc + 0.1))
+            parts_here = [q]
+            for k in range(1, n):
+                x = lo_x + k * step
+                b = Part("baluster", "column")
+                box(b, (x - 0.035, 4.29, zc - 0.035), (x + 0.035, 5.11, zc + 0.035))
+                parts_here.append(b)
+                balusters += 1
+            for b in parts_here:
+                base = len(rails.verts)
+                rails.verts += b.verts
+                rails.tris += [(a + base, bb + base, d + base) for a, bb, d in b.tris]
+
+    # Banners: single sheets (two-sided) hanging in front of every other lower arch.
+    banners = {m: Part(f"banner_{m}", m) for m in ("banner_red", "banner_blue")}
+    for i, (lo_x, hi_x) in enumerate(zip(edges[0::2], edges[1::2])):
+        if i % 2 == 1:
+            continue
+        for zc, m in ((-2.45, "banner_red"), (2.45, "banner_blue")):
+            axis_quad(banners[m], 2, 1 if zc < 0 else -1, zc, (lo_x + 0.25, 1.3, 0), (hi_x - 0.25, 3.19, 0))
+
+    cx, cy, cz, h = 0.6, 6.5, 0.2, 0.2  # light: 0.4 m x 0.4 m over the courtyard, facing down
+    light = room_quad("light", "light", 1, -1, cy, (cx - h, 0, cz - h), (cx + h, 0, cz + h))
+    parts += [columns, rails, light] + [banners[m] for m in ("banner_red", "banner_blue")]
+    materials = {
+        "floor": diffuse((0.55, 0.5, 0.42)),
+        "ceiling": diffuse((0.7, 0.66, 0.58)),
+        "stone": diffuse((0.72, 0.62, 0.46)),
+        "exterior": diffuse((0.5, 0.5, 0.5)),
+        "column": diffuse((0.78, 0.75, 0.68)),
+        "banner_red": diffuse((0.6, 0.08, 0.06)),
+        "banner_blue": diffuse((0.1, 0.16, 0.5)),
+        "light": emissive((0.78, 0.78, 0.78), (400.0, 380.0, 330.0)),
+    }
+    camera = {"eye": (-6.5, 1.7, -3.9), "target": (2.0, 2.4, 0.6), "vfov_deg": 70.0}
+    notes = [
+        f"shell: one closed solid ({volume:.3f} m^3): floor y [-0.3, 0], end walls |x| > 7, back walls "
+        "|z| > 4.8, arcades |z| in [2.5, 2.8] (lintels from y 3.2, upper pillars 0.5 m wide at "
+        "x = -5, -3, ..., 5, upper arches y [4.3, 7]), gallery floors y [4, 4.3], roofs y [8, 8.3]; "
+        "the courtyard |x| < 7, |z| < 2.5 is open above (black sky)",
+        f"12 fluted columns (48 sides, r 0.22 m) on plinths under capitals; {balusters} balusters "
+        "(7 cm square, 0.82 m) and rails in the upper arches; banners: single two-sided sheets "
+        "in front of every other lower arch",
+        f"light: 0.4 m x 0.4 m at y = {cy}, centred at x {cx}, z {cz}, facing down",
+    ]
+    desc = ("a two-storey arcaded courtyard (fluted columns, balustrades, banners) open to a black "
+            "sky, one small bright light over it; camera in a lower gallery: mostly bounced light.")
+    emit("atrium", desc, parts, materials, camera, (), notes)
+
+
+# ---------------------------------------------------------------------------------------------
 # faraway
 
 
@@ -681,6 +822,7 @@ def main():
         "bunny": lambda: bunny(args.bunny),
         "glassknot": glassknot,
         "faraway": faraway,
+        "atrium": atrium,
     }
     for name in args.names or makers:
         if name not in makers:

@@ -143,6 +143,7 @@ fn photon_and_cache_powers_of_any_magnitude_scale_linearly() {
             gather: &params,
             caustic_gather: &params,
             direct: Some(&direct),
+            probe: None,
         };
         let cache = cache.sites(source);
         let x = Vec3::new(0.5, 0.0, 0.5);

@@ -50,11 +50,11 @@
 
 use super::probe;
 use super::sppm::{for_each_flux, CLEAR};
-use crate::photon::footprint::Footprint;
 use crate::accel::Accel;
 use crate::config::RenderConfig;
 use crate::frame::specular::Landing;
 use crate::frame::{Counters, Frame};
+use crate::photon::footprint::Footprint;
 use crate::photon::map::PhotonMaps;
 use crate::stats::Widening;
 use glam::Vec3;

@@ -100,8 +100,8 @@ pub struct MapStages<'a> {
     pub indirect_unused: Option<&'static str>,
     /// Why the image does not need the caustic map, if it does not.
     pub caustic_unused: Option<&'static str>,
-    /// Pick every this-many-th indirect photon as a site of precomputed irradiance (`None`:
-    /// no sites).
+    /// Trace one path for every this-many indirect photon paths, whose hits are the sites of
+    /// precomputed irradiance (`None`: no sites).
     pub site_stride: Option<usize>,
     /// Trace the sites of precomputed caustic irradiance ([`CAUSTIC_SITE_SHARE`]).
     pub caustic_sites: bool,
@@ -186,25 +186,53 @@ impl MapStages<'_> {
         });
         progress.finish();
         stats.rays.photon += out.rays;
-        // The same density of sites whatever the colour mode: per-channel maps split the photons
-        // three ways, so each contributes a third as many sites. Picked (and the seen photons
-        // counted) while the maps are built, which fills the cores the builds' serial steps
-        // leave idle.
-        let (maps, (seen, sites)) = stats.run("kdtree.indirect", "balance the indirect map", |_| {
-            rayon::join(
-                || build_maps(&out, p.color),
-                || {
-                    let sites = match self.site_stride {
-                        Some(stride) => irradiance::pick_sites(&out.maps, stride * out.maps.len()),
-                        None => Vec::new(),
-                    };
-                    (count_seen(&out, &guide.region), sites)
-                },
-            )
+        // The seen photons counted while the maps are built, which fills the cores the builds'
+        // serial steps leave idle.
+        let (maps, seen) = stats.run("kdtree.indirect", "balance the indirect map", |_| {
+            rayon::join(|| build_maps(&out, p.color), || count_seen(&out, &guide.region))
         });
         drop(out);
         record_maps(stats, "indirect", &maps, &seen);
-        (drop_empty(stats, "indirect", maps), sites)
+        let maps = drop_empty(stats, "indirect", maps);
+        let sites = match self.site_stride {
+            Some(stride) if !maps.is_empty() => {
+                // The sites of precomputed irradiance: where indirect photons land, from paths
+                // of their own, traced the same way: one for every `stride` of the map's paths,
+                // and as many sites whatever the colour mode (per-channel paths, a third each
+                // map's, are a third as many).
+                // Sites at the map's own photons were biased: a site's estimate counted its own
+                // photon (+3 / (k - 1) with the cone), and where photons happened to be sparse
+                // the site read low over a larger cell (about -2 %); both cancelled only in
+                // part, and with the gathers' shortfall at edges. A point independent of the
+                // map gets the estimate any point gets.
+                let channels = if p.color == ColorMode::PerChannel { 3 } else { 1 };
+                let n = p.photons.div_ceil((stride * channels) as u64);
+                progress.start("irradiance sites", n);
+                let why = format!(
+                    "{n} indirect paths traced for where they land: sites independent of the map's photons"
+                );
+                let sites = stats.run("photons.indirect_sites", why, |stats| {
+                    let spec = PassSpec {
+                        pass: Pass::Indirect,
+                        n,
+                        color: p.color,
+                        max_bounces: p.max_bounces,
+                        targets: &[],
+                        aim: false,
+                        guide: guide.emission.as_ref(),
+                        portals,
+                        seed: seed ^ 0x517E,
+                    };
+                    let out = trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress);
+                    stats.rays.photon += out.rays;
+                    irradiance::pick_sites(&out.maps, 1)
+                });
+                progress.finish();
+                sites
+            }
+            _ => Vec::new(),
+        };
+        (maps, sites)
     }
 
     /// The scene's portals (none with `--portals false`) with their incoming flux estimated
@@ -481,46 +509,50 @@ pub struct GatherPair {
 }
 
 /// How much the gathers' region is squashed along the normal ([`GatherParams::flatten`]):
-/// `|d|² + (f − 1)(n·d)² < r²`. Two-pass photon mapping gathers over the whole disc, so its
-/// flat region (8) is what keeps a corner's other wall out.
+/// `|d|² + (f − 1)(n·d)² < r²`, for gathers over the whole disc (two-pass photon mapping's
+/// caustic estimates): the flat region (8) is what keeps a corner's other wall out.
 const FLATTEN: f32 = 8.0;
 
-/// The progressive modes' flattening: their footprints cut the disc at walls and edges, so the
-/// region can be thicker, and should be: the normal is the facet's, and where facets tilt from
-/// the surface they sample (a scanned mesh) a flat region cuts that surface short across the
-/// tilt (at 20°, to 0.74 of its width at 8, 0.95 at 2). The bunny's mean was −0.36 % at 8,
-/// −0.19 % at 4, −0.08 % at 2 (60 pppm passes), the Cornell box +0.02 % at each; at 20 s pppm's
-/// RMSE at 2 against 8 was 10 % lower on the bunny, 2 % on the glass knot, and the same within
-/// noise on six other scenes (docs/accuracy.md). (In the two-pass method 2 made the white
-/// furnace's corners 1 % bright.)
+/// The flattening of gathers over a footprint (the progressive modes' gathers, two-pass photon
+/// mapping's indirect estimates): the footprint cuts the disc at walls and edges, so the region
+/// can be thicker, and should be: the normal is the facet's, and where facets tilt from the
+/// surface they sample (a scanned mesh, a fluted column) a flat region cuts that surface short
+/// across the tilt (at 20°, to 0.74 of its width at 8, 0.95 at 2). The bunny's mean was −0.36 %
+/// at 8, −0.19 % at 4, −0.08 % at 2 (60 pppm passes), the Cornell box +0.02 % at each; at 20 s
+/// pppm's RMSE at 2 against 8 was 10 % lower on the bunny, 2 % on the glass knot, and the same
+/// within noise on six other scenes (docs/accuracy.md). Over the whole disc, 2 made the white
+/// furnace's corners 1 % bright (the other wall's photons counted): hence the footprints.
 const FOOTPRINT_FLATTEN: f32 = 2.0;
 
 impl GatherPair {
     /// `gathers` with the default radii of `scene`: a tenth of its bounding sphere's radius for
-    /// indirect light, a quarter of that for caustics.
+    /// indirect light, a quarter of that for caustics; for two-pass photon mapping, whose
+    /// indirect estimates count photons over a footprint and caustic ones over the whole disc.
     pub fn new(gathers: &Gathers, scene: &Scene) -> Self {
-        GatherPair::flattened(gathers, scene, FLATTEN)
+        GatherPair::flattened(gathers, scene, [FOOTPRINT_FLATTEN, FLATTEN])
     }
 
     /// [`GatherPair::new`] for gathers over a footprint (the progressive modes).
     pub fn with_footprint(gathers: &Gathers, scene: &Scene) -> Self {
-        GatherPair::flattened(gathers, scene, FOOTPRINT_FLATTEN)
+        GatherPair::flattened(gathers, scene, [FOOTPRINT_FLATTEN; 2])
     }
 
-    fn flattened(gathers: &Gathers, scene: &Scene, flatten: f32) -> Self {
+    /// The gathers, the indirect ones flattened by `flatten[0]`, the caustic ones by `flatten[1]`.
+    fn flattened(gathers: &Gathers, scene: &Scene, flatten: [f32; 2]) -> Self {
         let auto_radius = 0.1 * scene.bounds().bounding_sphere().1;
-        let params = |k: u32, radius: Option<f32>, default: f32| GatherParams {
+        let params = |k: u32, radius: Option<f32>, default: f32, flatten: f32| GatherParams {
             k: k as usize,
             max_radius: radius.unwrap_or(default),
             kernel: gathers.kernel,
             flatten,
         };
         GatherPair {
-            indirect: params(gathers.gather_photons, gathers.gather_radius, auto_radius),
+            indirect: params(gathers.gather_photons, gathers.gather_radius, auto_radius, flatten[0]),
             caustic: params(
                 gathers.caustic_gather_photons,
                 gathers.caustic_gather_radius,
                 0.25 * auto_radius,
+                flatten[1],
             ),
         }
     }

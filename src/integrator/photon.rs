@@ -8,6 +8,7 @@
 
 use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
+use super::probe;
 use crate::accel::Accel;
 use crate::config::{Component, IndirectMode, PhotonConfig};
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
@@ -17,7 +18,7 @@ use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material, TransportMode};
 use crate::photon::irradiance::{
-    Irradiance, LookupScratch, PrecomputedIrradiance, SiteDirect, SitePoint, SiteSource, Sites,
+    Irradiance, LookupScratch, PrecomputedIrradiance, SiteDirect, SitePoint, SiteProbe, SiteSource, Sites,
 };
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::PhotonMaps;
@@ -28,8 +29,11 @@ use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg32;
 use std::cell::RefCell;
 use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
-/// Irradiance is precomputed at every this-many-th indirect photon (Christensen uses 4).
+/// Irradiance is precomputed at a site for about every this-many indirect photons (Christensen
+/// uses 4): the hits of photon paths of their own, one for every this-many of the map's
+/// ([`MapStages::site_stride`]).
 const IRRADIANCE_STRIDE: usize = 4;
 
 /// Shadow-ray samples for the direct irradiance of each precomputed site.
@@ -195,10 +199,9 @@ impl<'f, 'a, A: Accel> PhotonMapper<'f, 'a, A> {
         let reason =
             format!("{} sites, one per {IRRADIANCE_STRIDE} photon paths, estimated as read", sites.len());
         let radius = self.gathers.indirect.max_radius;
-        // Final gathering reads the direct light at the sites, whose shadow rays leave from them.
-        let keep_errors = self.cfg.indirect == IndirectMode::FinalGather;
+        // The probes of the sites' footprints leave from them (and final gathering's shadow rays).
         index_sites(stats, "irradiance", IRRADIANCE_SITES, reason, || {
-            PrecomputedIrradiance::new(sites, radius, keep_errors)
+            PrecomputedIrradiance::new(sites, radius, true)
         })
     }
 }
@@ -252,6 +255,17 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
             let l = direct_light(frame, &hit, site.n, &white, SITE_LIGHT_SAMPLES, &mut rng, &mut c);
             std::f32::consts::PI * l
         };
+        // The footprint of a site's indirect gather, probed on the side asked for; the probes'
+        // rays are counted with the camera stage's (sites are estimated as the camera reads them).
+        let site_rays = AtomicU64::new(0);
+        let site_probe = |i: usize, site: &SitePoint, back: bool, r2: f32| {
+            let mut rng = Pcg32::seed_from_u64(derive_seed(seed, 0xF007, 2 * i as u64 + u64::from(back)));
+            let mut c = Counters::default();
+            let n = if back { -site.n } else { site.n };
+            let fp = probe::probe(frame, &SurfaceHit::flat(site.pos, site.err, n), n, r2, &mut rng, &mut c);
+            site_rays.fetch_add(c.rays.gather, Ordering::Relaxed);
+            fp
+        };
         let shading = Shading {
             frame,
             cfg: self.cfg,
@@ -263,6 +277,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                 gather: &g.indirect,
                 caustic_gather: &g.caustic,
                 direct: final_gather.then_some(&direct as &SiteDirect<'_>),
+                probe: Some(&site_probe as &SiteProbe<'_>),
             }),
             caustic: made.caustic.sites(SiteSource {
                 indirect: &[],
@@ -270,6 +285,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
                 gather: &g.caustic,
                 caustic_gather: &g.caustic,
                 direct: None,
+                probe: None,
             }),
             gathers: self.gathers,
         };
@@ -313,6 +329,7 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
             )
         });
         let mut c = c;
+        c.rays.gather += site_rays.load(Ordering::Relaxed);
         let after = record_estimated(stats, IRRADIANCE_SITES, &made.irradiance)
             + record_estimated(stats, CAUSTIC_SITES, &made.caustic);
         c.clock.estimate_ns = ((after - before).max(0.0) * 1e9) as u64;
@@ -420,14 +437,7 @@ impl<A: Accel> Shading<'_, '_, A> {
                 IndirectMode::Estimate => {
                     let e = match self.precomputed_indirect(hit, wo, m, scratch, c) {
                         Some(e) => e,
-                        None => {
-                            c.queries += self.maps.indirect.len() as u64;
-                            let (maps, g) = (&self.maps.indirect, &self.gathers.indirect);
-                            let nb = &mut scratch.neighbors;
-                            c.timed(Part::Gathers, || {
-                                PhotonMaps::radiance(maps, hit.p, hit.normals(), wo, m, g, nb)
-                            })
-                        }
+                        None => self.indirect_estimate(hit, wo, m, scratch, c),
                     };
                     l += if weight == 1.0 { e } else { e * weight };
                 }
@@ -507,6 +517,33 @@ impl<A: Accel> Shading<'_, '_, A> {
         Some(f * self.irradiance.indirect(site, ns))
     }
 
+    /// Reflected indirect radiance at `hit` toward `wo` from the indirect maps themselves, over
+    /// the footprint of each gather's disc ([`PhotonMaps::radiance_over`], probed here).
+    fn indirect_estimate(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        m: &Material,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        c.queries += self.maps.indirect.len() as u64;
+        let (maps, g, frame) = (&self.maps.indirect, &self.gathers.indirect, self.frame);
+        let nb = &mut scratch.neighbors;
+        let ns = face_forward(hit.n, wo);
+        let mut probes = Counters::default();
+        // The probes' turn is drawn from the hit's position, not the camera sample's generator,
+        // which the samples after this one go on drawing from.
+        let (x, y, z) = (hit.p.x.to_bits(), hit.p.y.to_bits(), hit.p.z.to_bits());
+        let mut turn = Pcg32::seed_from_u64(derive_seed(u64::from(x) << 32 | u64::from(y), 0xF007, z.into()));
+        let mut at = |_back: bool, r2: f32| probe::probe(frame, hit, ns, r2, &mut turn, &mut probes);
+        let e = c.timed(Part::Gathers, || {
+            PhotonMaps::radiance_over(maps, hit.p, hit.normals(), wo, m, g, nb, &mut at)
+        });
+        c.rays.gather += probes.rays.gather;
+        e
+    }
+
     /// Jensen's final gather: `final_gather_rays` BRDF-sampled rays; where each lands on a
     /// diffuse or glossy surface (after any mirrors and glass), the radiance leaving it toward
     /// the gather point: on Lambertian surfaces from the precomputed direct, indirect and caustic
@@ -538,17 +575,14 @@ impl<A: Accel> Shading<'_, '_, A> {
                 e.direct + e.indirect + e.caustic
             } else {
                 let mut ly = direct_light(self.frame, &y, wy, my, 1, rng, c);
-                c.queries += (self.maps.caustic.len() + self.maps.indirect.len()) as u64;
+                c.queries += self.maps.caustic.len() as u64;
                 let nb = &mut scratch.neighbors;
                 let g = &self.gathers;
-                let (caustic, indirect) = (&self.maps.caustic, &self.maps.indirect);
+                let caustic = &self.maps.caustic;
                 ly += c.timed(Part::Gathers, || {
                     PhotonMaps::radiance(caustic, y.p, y.normals(), wy, my, &g.caustic, nb)
                 });
-                ly += c.timed(Part::Gathers, || {
-                    PhotonMaps::radiance(indirect, y.p, y.normals(), wy, my, &g.indirect, nb)
-                });
-                ly
+                ly + self.indirect_estimate(&y, wy, my, scratch, c)
             };
             sum += beta * ly;
         }

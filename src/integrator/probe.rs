@@ -25,13 +25,10 @@
 use crate::accel::Accel;
 use crate::frame::{Counters, Frame, SurfaceHit};
 use crate::geometry::{offset_ray_origin, Ray};
-use crate::photon::footprint::{Footprint, PROBES};
+use crate::photon::footprint::{Footprint, LEAST_SHARE, PROBES};
 use glam::{Vec2, Vec3};
 use rand::Rng;
 use rand_pcg::Pcg32;
-
-/// The least part of its own disc a footprint is taken to fill (see [`probe`]).
-pub(super) const LEAST_SHARE: f32 = 1.0 / 16.0;
 
 /// What a probe found along one direction.
 enum Reach {
@@ -42,7 +39,6 @@ enum Reach {
     /// The surface ends before the aim.
     Edge,
 }
-
 
 /// Probes the surface of `hit` (unit normal `ns` on the viewer's side) within the squared
 /// radius `r2`. Where less than a quarter of the disc lies on the surface (a strip narrower

@@ -34,6 +34,7 @@
 
 use super::maps::{Analysis, GatherPair, MapStages};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
+use super::probe;
 use crate::accel::{Accel, Hit};
 use crate::config::ProgressiveConfig;
 use crate::film::Film;
@@ -44,7 +45,6 @@ use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::Ray;
 use crate::material::face_forward;
-use super::probe;
 use crate::photon::footprint::Footprint;
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
@@ -586,7 +586,6 @@ pub(super) fn for_each_flux(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::SeedableRng;
 
     /// A first point's radius serves visible points on its own surface within it, and no
     /// other; discs inside the one found whole need no probes.

@@ -3,12 +3,15 @@
 //! rays, is the integrators': `integrator::probe`). Photons count only over a footprint, and an
 //! estimate divides by its area: the geometry here keeps the two in agreement.
 
-use super::map::kernel_integral;
+use super::kernel::kernel_integral;
 use crate::config::Kernel;
 use glam::{Vec2, Vec3};
 
 /// Directions in which a surface point probes its surface, evenly spaced around it.
 pub const PROBES: usize = 8;
+
+/// The least part of its own disc a footprint is taken to fill (see `integrator::probe`).
+pub const LEAST_SHARE: f32 = 1.0 / 16.0;
 
 /// The part of a gather disc that the visible point's own surface fills, as far as rays cast
 /// down onto the surface can tell: the disc cut back by the walls standing on the surface and
@@ -52,7 +55,6 @@ pub struct Footprint {
     pub share: f32,
 }
 
-
 impl Footprint {
     /// The whole disc of squared radius `r2`.
     pub fn whole(r2: f32) -> Self {
@@ -80,7 +82,8 @@ impl Footprint {
     /// squared radius `r2`): with weights `kernel_weight(d² / r2)` summed over the photons
     /// over it, the estimate divides by `π r2` times this. For the box kernel, the footprint's
     /// area over its disc's; for the others, the kernel's radial integral out to the polygon,
-    /// averaged over 64 directions (midpoints of eight in each probe's wedge).
+    /// averaged over 64 directions (midpoints of eight in each probe's wedge). At least
+    /// [`LEAST_SHARE`], as the probing floors a footprint's area.
     pub fn kernel_share(&self, kernel: Kernel) -> f32 {
         if !self.cut {
             return 1.0;
@@ -88,8 +91,9 @@ impl Footprint {
         let r = self.r2.sqrt();
         let step = std::f32::consts::TAU / PROBES as f32;
         if kernel == Kernel::Box {
-            let area: f32 = (0..PROBES).map(|j| wedge_area(self.ends[j], self.ends[(j + 1) % PROBES], r)).sum();
-            return (area / (std::f32::consts::PI * self.r2)).clamp(0.0, 1.0);
+            let area: f32 =
+                (0..PROBES).map(|j| wedge_area(self.ends[j], self.ends[(j + 1) % PROBES], r)).sum();
+            return (area / (std::f32::consts::PI * self.r2)).clamp(LEAST_SHARE, 1.0);
         }
         const SUB: usize = 8;
         let mut sum = 0.0;
@@ -111,7 +115,7 @@ impl Footprint {
                 sum += kernel_integral(kernel, (rho / r).min(1.0));
             }
         }
-        (sum / (PROBES * SUB) as f32).clamp(0.0, 1.0)
+        (sum / (PROBES * SUB) as f32).clamp(LEAST_SHARE, 1.0)
     }
 
     /// The footprint over the same surface within the disc of half the area (squared radius
@@ -162,6 +166,48 @@ impl Footprint {
     }
 }
 
+/// The footprints of one surface point's gathers, one per photon map (the lecture's three
+/// per-channel maps), each at its own radius: probed once, and cut down for the other maps
+/// ([`Footprint::within`]). With several maps the first is probed `MARGIN` times wider than
+/// asked, so that the others' radii, about the same, mostly fall within it.
+pub struct Footprints<F> {
+    probe: F,
+    margin: f32,
+    /// On each side (front, back): the squared radius probed, and what the probes found.
+    probed: [Option<(f32, Footprint)>; 2],
+}
+
+/// How much wider (in squared radius) a point's first footprint is probed when several maps
+/// will ask for theirs.
+const MARGIN: f32 = 1.5;
+
+impl<F: FnMut(bool, f32) -> Footprint> Footprints<F> {
+    /// The footprints `probe(back, r2)` finds, for the gathers of `maps` maps.
+    pub fn new(probe: F, maps: usize) -> Self {
+        Footprints { probe, margin: if maps > 1 { MARGIN } else { 1.0 }, probed: [None, None] }
+    }
+
+    /// The footprint on the front (or with `back` the back) within the squared radius `r2`
+    /// (or a smaller one, where the probing shrank the disc: its own `r2`).
+    pub fn get(&mut self, back: bool, r2: f32) -> Footprint {
+        let side = usize::from(back);
+        let fp = match self.probed[side] {
+            Some((asked, fp)) if r2 <= asked => fp,
+            _ => {
+                let asked = r2 * self.margin;
+                let fp = (self.probe)(back, asked);
+                self.probed[side] = Some((asked, fp));
+                fp
+            }
+        };
+        if fp.r2 <= r2 {
+            fp
+        } else {
+            fp.within(r2 / fp.r2)
+        }
+    }
+}
+
 /// The area of the disc of radius `r` about the origin within the triangle (origin, `a`, `b`),
 /// `b` counter-clockwise from `a` by less than a half turn: the triangle's part of the segment
 /// `a b` inside the disc, and circular sectors where it runs outside.
@@ -186,7 +232,6 @@ fn wedge_area(a: Vec2, b: Vec2, r: f32) -> f32 {
     let after = if t1 < 1.0 { sector(p1, b) } else { 0.0 };
     before + 0.5 * p0.perp_dot(p1) + after
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -246,7 +291,7 @@ mod tests {
     /// contains (measured by sampling the disc), for the same kinds of polygons.
     #[test]
     fn kernel_share_is_the_weight_of_what_it_contains() {
-        use super::super::map::kernel_weight;
+        use super::super::kernel::kernel_weight;
         let mut rng = Pcg32::seed_from_u64(11);
         let r = 0.4f32;
         let step = std::f32::consts::TAU / PROBES as f32;
@@ -276,9 +321,10 @@ mod tests {
                 }
                 let measured = (weight / n as f64) as f32;
                 let share = fp.kernel_share(kernel);
-                assert!((measured - share).abs() < 0.012, "{kernel:?} case {case}: {share} against {measured}");
+                let expect = measured.max(LEAST_SHARE);
+                assert!((expect - share).abs() < 0.012, "{kernel:?} case {case}: {share} against {measured}");
                 if kernel == Kernel::Box {
-                    assert!((share - fp.share).abs() < 1e-6);
+                    assert!((share - fp.share.max(LEAST_SHARE)).abs() < 1e-6);
                 }
             }
             assert_eq!(Footprint::whole(0.3).kernel_share(kernel), 1.0);

@@ -12,7 +12,9 @@
 //! rejects photons arriving from behind the surface, and weights them with a box, cone or
 //! Gaussian kernel, each normalised to integrate to one over the disc.
 
+use super::footprint::{Footprint, Footprints};
 use super::kdtree::{flattened_metric, KdPoint, KdTree, Neighbor};
+use super::kernel::kernel_weight;
 use super::pack;
 use crate::config::Kernel;
 use crate::material::{face_forward, Material, Normals};
@@ -315,6 +317,100 @@ impl PhotonMap {
         [front * self.scale / (PI * r2), back * self.scale / (PI * r2)]
     }
 
+    /// [`PhotonMap::radiance`] over footprints: the photons count only over
+    /// `probe(false, r2)`, the footprint of the gather's disc (squared radius `r2`, that of the
+    /// k-nearest search) on the surface at `x`, and the estimate divides by its weight
+    /// ([`Footprint::kernel_share`]) instead of the whole disc's. Two-pass photon mapping's
+    /// indirect estimates: over the whole disc, every point near an edge or a wall, and every
+    /// point of a surface curving away within the disc, came out dark.
+    #[allow(clippy::too_many_arguments)]
+    pub fn radiance_over(
+        &self,
+        x: Vec3,
+        normals: Normals,
+        wo: Vec3,
+        m: &Material,
+        params: &GatherParams,
+        scratch: &mut Vec<Neighbor>,
+        probe: &mut dyn FnMut(bool, f32) -> Footprint,
+    ) -> Vec3 {
+        let ns = face_forward(normals.geometric, wo);
+        if let Some(kd) = m.lambertian() {
+            let [e, _] = self.sides_over(x, ns, params, &mut 0.0, scratch, false, probe);
+            return e * kd * std::f32::consts::FRAC_1_PI;
+        }
+        let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
+        let mut footprint: Option<Footprint> = None;
+        let mut sum = Vec3::ZERO;
+        for nb in estimated(scratch, params) {
+            let p = self.tree.get(nb.index);
+            let wi = pack::decode_dir_oct(p.dir);
+            if wi.dot(ns) <= 0.0 {
+                continue;
+            }
+            let fp = footprint.get_or_insert_with(|| probe(false, r2));
+            if nb.dist2 < fp.r2 && fp.contains(p.position() - x) {
+                sum += kernel_weight(params.kernel, nb.dist2 / fp.r2)
+                    * normals.gather_eval(m, wo, wi)
+                    * self.packed_power(p);
+            }
+        }
+        footprint.map_or(Vec3::ZERO, |fp| sum * self.scale / (PI * fp.r2 * fp.kernel_share(params.kernel)))
+    }
+
+    /// [`PhotonMap::irradiance_sides_near`] over footprints: each side's photons count only over
+    /// `probe(back, r2)`, the footprint of the gather's disc on that side of the surface at `x`
+    /// (probed only where photons arrived on that side), as in [`PhotonMap::radiance_over`].
+    pub fn irradiance_sides_over(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        guess: &mut f32,
+        scratch: &mut Vec<Neighbor>,
+        probe: &mut dyn FnMut(bool, f32) -> Footprint,
+    ) -> [Vec3; 2] {
+        self.sides_over(x, ns, params, guess, scratch, true, probe)
+    }
+
+    /// Irradiance on the side of `ns` (and with `both`, on the other) over the footprints
+    /// `probe` gives, from one k-nearest search begun at `guess` ([`PhotonMap::gather_guessed`]).
+    #[allow(clippy::too_many_arguments)]
+    fn sides_over(
+        &self,
+        x: Vec3,
+        ns: Vec3,
+        params: &GatherParams,
+        guess: &mut f32,
+        scratch: &mut Vec<Neighbor>,
+        both: bool,
+        probe: &mut dyn FnMut(bool, f32) -> Footprint,
+    ) -> [Vec3; 2] {
+        let found = self.gather_guessed(x, ns, params, *guess, scratch);
+        *guess = found.map_or(0.0, |r2| r2 * GUESS_MARGIN);
+        let Some(r2) = found else { return [Vec3::ZERO; 2] };
+        let mut footprints: [Option<Footprint>; 2] = [None, None];
+        let mut sums = [Vec3::ZERO; 2];
+        for nb in estimated(scratch, params) {
+            let p = self.tree.get(nb.index);
+            let side = pack::decode_dir_oct_unnormalized(p.dir).dot(ns);
+            let s = match side {
+                _ if side > 0.0 => 0,
+                _ if side < 0.0 && both => 1,
+                _ => continue,
+            };
+            let fp = footprints[s].get_or_insert_with(|| probe(s == 1, r2));
+            if nb.dist2 < fp.r2 && fp.contains(p.position() - x) {
+                sums[s] += kernel_weight(params.kernel, nb.dist2 / fp.r2) * self.packed_power(p);
+            }
+        }
+        let estimate = |s: usize| {
+            footprints[s]
+                .map_or(Vec3::ZERO, |fp| sums[s] * self.scale / (PI * fp.r2 * fp.kernel_share(params.kernel)))
+        };
+        [estimate(0), estimate(1)]
+    }
+
     /// Gathers the photons near `x` into `scratch` (a disc flattened along `ns`) and returns the
     /// squared radius of the estimate's disc, or `None` when nothing was found. Photons arriving
     /// from behind the surface (`wi . ns <= 0`) are left for the caller to reject.
@@ -511,45 +607,6 @@ fn estimated<'s>(found: &'s [Neighbor], params: &GatherParams) -> &'s [Neighbor]
     }
 }
 
-/// Kernel weight at squared normalised distance `t2 = d^2 / r^2`, normalised so that the
-/// weights integrate to 1 over the disc of area `pi r^2` (Jensen 2001, 7.2.1): box 1; cone
-/// `(1 - d/r) / (1 - 2/3)`; Gaussian (Pavicic 1990) `a (1 - (1 - e^(-b t2/2)) / (1 - e^-b))`
-/// with `a = 0.918`, `b = 1.953`, divided by its mean over the disc,
-/// `a (1 - (1 - (2/b)(1 - e^(-b/2))) / (1 - e^-b)) = 0.53115` (Jensen's constants alone give
-/// the shape, not unit integral: used as printed they darken the estimate by 47 %).
-#[inline]
-pub fn kernel_weight(kernel: Kernel, t2: f32) -> f32 {
-    match kernel {
-        Kernel::Box => 1.0,
-        Kernel::Cone => 3.0 * (1.0 - t2.sqrt()).max(0.0),
-        Kernel::Gaussian => {
-            const A: f32 = 0.918;
-            const B: f32 = 1.953;
-            const MEAN: f32 = 0.531_154_9;
-            (A / MEAN) * (1.0 - (1.0 - (-B * 0.5 * t2).exp()) / (1.0 - (-B).exp()))
-        }
-    }
-}
-
-/// The kernel's weight within the disc of radius `t r` (`t` in `[0, 1]`) over its weight in
-/// the whole disc of radius `r`: `2 ∫₀ᵗ kernel_weight(s²) s ds` (box `t²`, cone `3t² − 2t³`,
-/// Gaussian in closed form), for estimates over part of a disc ([`super::footprint`]).
-#[inline]
-pub fn kernel_integral(kernel: Kernel, t: f32) -> f32 {
-    let t2 = t * t;
-    match kernel {
-        Kernel::Box => t2,
-        Kernel::Cone => t2 * (3.0 - 2.0 * t),
-        Kernel::Gaussian => {
-            const A: f32 = 0.918;
-            const B: f32 = 1.953;
-            const MEAN: f32 = 0.531_154_9;
-            let c = 1.0 / (1.0 - (-B).exp());
-            (A / MEAN) * ((1.0 - c) * t2 + c * (2.0 / B) * (1.0 - (-B * 0.5 * t2).exp()))
-        }
-    }
-}
-
 /// `n` photons scattered uniformly at random over the square `[0, side]²` of the floor `y = 0`,
 /// arriving straight down with `1 / n` W each (generator seeded `seed`): for tests of the
 /// estimates' means.
@@ -588,45 +645,28 @@ impl PhotonMaps {
     ) -> Vec3 {
         maps.iter().map(|map| map.radiance(x, normals, wo, m, params, scratch)).sum()
     }
+
+    /// Sum of the radiance estimates of `maps` over footprints ([`PhotonMap::radiance_over`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn radiance_over(
+        maps: &[PhotonMap],
+        x: Vec3,
+        normals: Normals,
+        wo: Vec3,
+        m: &Material,
+        params: &GatherParams,
+        scratch: &mut Vec<Neighbor>,
+        probe: &mut dyn FnMut(bool, f32) -> Footprint,
+    ) -> Vec3 {
+        let mut footprints = Footprints::new(probe, maps.len());
+        let mut at = |back, r2| footprints.get(back, r2);
+        maps.iter().map(|map| map.radiance_over(x, normals, wo, m, params, scratch, &mut at)).sum()
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Integrates a kernel over the unit disc numerically: must be 1 (times pi r^2 = pi).
-    #[test]
-    fn kernels_are_normalised() {
-        for kernel in [Kernel::Box, Kernel::Cone, Kernel::Gaussian] {
-            let n = 20000;
-            let mut integral = 0.0f64;
-            for i in 0..n {
-                let r = (i as f64 + 0.5) / n as f64;
-                integral +=
-                    kernel_weight(kernel, (r * r) as f32) as f64 * 2.0 * std::f64::consts::PI * r / n as f64;
-            }
-            let expect = std::f64::consts::PI;
-            assert!((integral - expect).abs() / expect < 0.01, "{kernel:?}: {integral}");
-        }
-    }
-
-    /// `kernel_integral` is the weight's integral out to `t r`, over the whole disc's.
-    #[test]
-    fn kernel_integrals_are_the_weights_integrals() {
-        for kernel in [Kernel::Box, Kernel::Cone, Kernel::Gaussian] {
-            for t in [0.0f64, 0.1, 0.35, 0.5, 0.8, 1.0] {
-                let n = 20000;
-                let integral: f64 = (0..n)
-                    .map(|i| {
-                        let s = t * (i as f64 + 0.5) / n as f64;
-                        2.0 * kernel_weight(kernel, (s * s) as f32) as f64 * s * t / n as f64
-                    })
-                    .sum();
-                let got = kernel_integral(kernel, t as f32) as f64;
-                assert!((got - integral).abs() < 1e-3, "{kernel:?} at {t}: {got} against {integral}");
-            }
-        }
-    }
 
     /// A uniform photon density on a plane gives the exact irradiance and radiance.
     #[test]

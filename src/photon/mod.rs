@@ -4,7 +4,8 @@
 //!   Russian roulette, and are stored at diffuse and glossy hits, the first hit from the light
 //!   excepted; one pass fills the indirect map, another the caustic map.
 //! * [`map`]: a photon map and its radiance estimate (k nearest photons on a flattened disc,
-//!   box, cone or Gaussian kernel).
+//!   box, cone or Gaussian kernel: [`kernel`]), over the whole disc or over its
+//!   [`footprint`], the part the surface at its centre fills.
 //! * [`kdtree`]: the balanced point kd-tree under the maps and the precomputed irradiance
 //!   (implicit, pointer-free, parallel build, k-NN with a flattened gather metric).
 //! * [`irradiance`]: irradiance precomputed at a subset of the photons (Christensen 1999).
@@ -29,10 +30,11 @@
 //! Compared with Jensen's 28 B that is ~29% less memory and bandwidth for the gather, which is
 //! memory-bound.
 
+pub mod footprint;
 pub mod guide;
 pub mod irradiance;
 pub mod kdtree;
-pub mod footprint;
+pub mod kernel;
 pub mod map;
 pub mod pack;
 pub mod portal;
