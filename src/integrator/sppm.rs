@@ -45,7 +45,7 @@ use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::Ray;
 use crate::material::face_forward;
-use crate::photon::footprint::Footprint;
+use crate::photon::footprint::{Footprint, CLEAR};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
 use crate::stats::Stats;
@@ -316,10 +316,6 @@ pub(super) struct FirstPoint {
     /// light, [`super::bandwidth`]).
     pub(super) narrow: f32,
 }
-
-/// How much wider than the first radius the surface is probed for walls and edges: a later
-/// disc, about a visible point a little off the first, must fit inside.
-pub(super) const CLEAR: f32 = 1.5;
 
 /// The least cosine between a visible point's normal and its pixel's first point's for the
 /// first point to serve it (26°).

@@ -7,8 +7,18 @@ use super::kernel::kernel_integral;
 use crate::config::Kernel;
 use glam::{Vec2, Vec3};
 
-/// Directions in which a surface point probes its surface, evenly spaced around it.
+/// Directions in which a surface point probes its surface, evenly spaced around it (eight:
+/// [`Footprint::contains`] finds a point's wedge by halving the turn three times).
 pub const PROBES: usize = 8;
+
+/// How much wider than a gather's radius a surface is probed for walls and edges where later
+/// discs nearby may be served by what it found (a progressive pixel's first point, a block of
+/// irradiance sites): a later disc, about a point a little off the first, must fit inside.
+pub const CLEAR: f32 = 1.5;
+
+/// The least cosine between two points' normals for one's clear disc to serve the other
+/// (26°).
+const SAME_SURFACE_COS: f32 = 0.9;
 
 /// The least part of its own disc a footprint is taken to fill (see `integrator::probe`).
 pub const LEAST_SHARE: f32 = 1.0 / 16.0;
@@ -41,8 +51,8 @@ pub const LEAST_SHARE: f32 = 1.0 / 16.0;
 pub struct Footprint {
     /// Tangent frame: the polygon's coordinates are along these.
     pub(crate) t: [Vec3; 2],
-    /// The angle of the first probe.
-    pub(crate) theta0: f32,
+    /// `(cos, sin)` of the angle of the first probe.
+    pub(crate) turn: Vec2,
     /// The probes' end points, counter-clockwise, in the tangent frame.
     pub(crate) ends: [Vec2; PROBES],
     /// Whether some probe ended inside the rim (otherwise the footprint is the whole disc).
@@ -60,7 +70,7 @@ impl Footprint {
     pub fn whole(r2: f32) -> Self {
         Footprint {
             t: [Vec3::X, Vec3::Y],
-            theta0: 0.0,
+            turn: Vec2::X,
             ends: [Vec2::ZERO; PROBES],
             cut: false,
             r2,
@@ -75,7 +85,8 @@ impl Footprint {
         let r = r2.sqrt();
         let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
         let share = (area / (std::f32::consts::PI * r2)).clamp(0.0, 1.0);
-        Footprint { t, theta0, ends, cut: true, r2, share }
+        let (sin, cos) = theta0.sin_cos();
+        Footprint { t, turn: Vec2::new(cos, sin), ends, cut: true, r2, share }
     }
 
     /// The footprint's weight under `kernel` over the weight of its whole disc (its own, of
@@ -96,13 +107,17 @@ impl Footprint {
             return (area / (std::f32::consts::PI * self.r2)).clamp(LEAST_SHARE, 1.0);
         }
         const SUB: usize = 8;
+        // The directions, turned on by step / SUB from half that past the first probe's.
+        let by = |angle: f32| {
+            let (sin, cos) = angle.sin_cos();
+            Vec2::new(cos, sin)
+        };
+        let (mut u, advance) = (self.turn.rotate(by(0.5 * step / SUB as f32)), by(step / SUB as f32));
         let mut sum = 0.0;
         for j in 0..PROBES {
             let (a, b) = (self.ends[j], self.ends[(j + 1) % PROBES]);
             let edge = b - a;
-            for s in 0..SUB {
-                let (sin, cos) = (self.theta0 + step * (j as f32 + (s as f32 + 0.5) / SUB as f32)).sin_cos();
-                let u = Vec2::new(cos, sin);
+            for _ in 0..SUB {
                 // Where the direction meets the segment `a b`: a + s (b - a) = ρ u.
                 let across = u.perp_dot(edge);
                 let rho = if across > 0.0 {
@@ -113,6 +128,7 @@ impl Footprint {
                     r
                 };
                 sum += kernel_integral(kernel, (rho / r).min(1.0));
+                u = u.rotate(advance);
             }
         }
         (sum / (PROBES * SUB) as f32).clamp(LEAST_SHARE, 1.0)
@@ -158,11 +174,34 @@ impl Footprint {
             return true;
         }
         let q = Vec2::new(offset.dot(self.t[0]), offset.dot(self.t[1]));
-        let step = std::f32::consts::TAU / PROBES as f32;
-        let angle = (q.y.atan2(q.x) - self.theta0).rem_euclid(std::f32::consts::TAU);
-        let j = ((angle / step) as usize).min(PROBES - 1);
+        // The probe wedge it lies in: its direction turned back by the first probe's angle.
+        let (c, s) = (self.turn.x, self.turn.y);
+        let j = octant(Vec2::new(q.x * c + q.y * s, q.y * c - q.x * s));
         let (a, b) = (self.ends[j], self.ends[(j + 1) % PROBES]);
         (b - a).perp_dot(q - a) > 0.0
+    }
+}
+
+/// A disc about a surface point that its probes found whole (no wall standing on it, no edge
+/// within it): a disc within it about a point of the same surface needs no probes.
+#[derive(Clone, Copy, Debug)]
+pub struct Clear {
+    p: Vec3,
+    n: Vec3,
+    r2: f32,
+}
+
+impl Clear {
+    /// The disc of squared radius `r2` about `p` (normal `n`), found whole.
+    pub fn new(p: Vec3, n: Vec3, r2: f32) -> Self {
+        Clear { p, n, r2 }
+    }
+
+    /// Whether the disc of squared radius `r2` about `p`, normal `n`, lies within this one on
+    /// the same surface (normals within 26°).
+    pub fn covers(&self, p: Vec3, n: Vec3, r2: f32) -> bool {
+        let reach = (p - self.p).length() + r2.sqrt();
+        reach * reach <= self.r2 && n.dot(self.n) > SAME_SURFACE_COS
     }
 }
 
@@ -206,6 +245,24 @@ impl<F: FnMut(bool, f32) -> Footprint> Footprints<F> {
             fp.within(r2 / fp.r2)
         }
     }
+}
+
+/// The eighth of a turn `[j π/4, (j + 1) π/4)` holding the direction of `p` (on a boundary,
+/// either side's: the two wedges' tests agree along the probe between them).
+#[inline]
+fn octant(p: Vec2) -> usize {
+    let (mut x, mut y, mut j) = (p.x, p.y, 0);
+    if y < 0.0 {
+        (x, y, j) = (-x, -y, 4);
+    }
+    if x <= 0.0 {
+        (x, y) = (y, -x);
+        j += 2;
+    }
+    if y >= x {
+        j += 1;
+    }
+    j
 }
 
 /// The area of the disc of radius `r` about the origin within the triangle (origin, `a`, `b`),
@@ -262,8 +319,8 @@ mod tests {
             }
             let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
             let share = area / (std::f32::consts::PI * r * r);
-            let fp = Footprint { t: [Vec3::X, Vec3::Z], theta0, ends, cut: true, r2: r * r, share };
-            assert!((Footprint::cut(fp.t, theta0, ends, r * r).share - share).abs() < 1e-6);
+            let fp = Footprint::cut([Vec3::X, Vec3::Z], theta0, ends, r * r);
+            assert!((fp.share - share).abs() < 1e-6);
             let n = 40_000;
             let mut inside = 0;
             for i in 0..n {
@@ -285,6 +342,16 @@ mod tests {
             })
             .sum();
         assert!((full / (std::f32::consts::PI * r * r) - 1.0).abs() < 1e-4, "{full}");
+    }
+
+    /// The wedge a direction falls in is the one its angle gives.
+    #[test]
+    fn octants_are_eighths_of_the_turn() {
+        for k in 0..720 {
+            let angle = (k as f32 + 0.25) * std::f32::consts::TAU / 720.0;
+            let expect = (angle / (std::f32::consts::TAU / 8.0)) as usize;
+            assert_eq!(octant(Vec2::new(angle.cos(), angle.sin()) * 3.0), expect, "{angle}");
+        }
     }
 
     /// Under every kernel, the footprint's weighted share is the kernel's weight over what it

@@ -17,7 +17,7 @@
 //! estimated, 78 % of the Cornell box's: `--stats`, `irradiance_cache`). A block's values depend only on its sites and the maps,
 //! so they are the same whichever thread estimates them and whenever.
 
-use super::footprint::{Footprint, Footprints};
+use super::footprint::{Clear, Footprint, Footprints, CLEAR};
 use super::kdtree::{KdPoint, KdTree, Neighbor};
 use super::map::{GatherParams, Hits, PhotonMap};
 use super::pack;
@@ -348,6 +348,8 @@ impl PrecomputedIrradiance {
         // Consecutive sites are near each other: each map's search starts from the last one's
         // radius.
         let mut guesses = vec![0.0f32; source.indirect.len()];
+        // On each side, the last disc the block's probes found whole.
+        let mut clear: [Option<Clear>; 2] = [None, None];
         let raw: Vec<(Irradiance, Vec3)> = in_block
             .iter()
             .enumerate()
@@ -357,9 +359,31 @@ impl PrecomputedIrradiance {
                 let [mut indirect, mut back] = [Vec3::ZERO; 2];
                 let point = || SitePoint { pos, err: self.errors[first + j], n };
                 let maps = source.indirect.len();
-                let mut footprints = source
-                    .probe
-                    .map(|probe| Footprints::new(move |back, r2| probe(first + j, &point(), back, r2), maps));
+                let clear = &mut clear;
+                let mut footprints = source.probe.map(|probe| {
+                    Footprints::new(
+                        move |back: bool, r2: f32| {
+                            // Probed `CLEAR` times wider, so that the block's next sites within
+                            // a disc found whole on the same side need no probes of their own.
+                            let side = if back { -n } else { n };
+                            let whole = &mut clear[usize::from(back)];
+                            if whole.is_some_and(|c| c.covers(pos, side, r2)) {
+                                return Footprint::whole(r2);
+                            }
+                            let wide = probe(first + j, &point(), back, CLEAR * CLEAR * r2);
+                            if !wide.cut {
+                                *whole = Some(Clear::new(pos, side, wide.r2));
+                                return Footprint::whole(r2);
+                            }
+                            if wide.r2 <= r2 {
+                                wide
+                            } else {
+                                wide.within(r2 / wide.r2)
+                            }
+                        },
+                        maps,
+                    )
+                });
                 for (m, guess) in source.indirect.iter().zip(&mut guesses) {
                     let [f, b] = match &mut footprints {
                         Some(fps) => {
