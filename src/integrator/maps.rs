@@ -170,19 +170,20 @@ impl MapStages<'_> {
         } else {
             "diffuse surfaces and lit scene"
         };
+        // The map's paths, and the sites' (below), traced the same way.
+        let spec = |n, seed| PassSpec {
+            pass: Pass::Indirect,
+            n,
+            color: p.color,
+            max_bounces: p.max_bounces,
+            targets: &[],
+            aim: false,
+            guide: guide.emission.as_ref(),
+            portals,
+            seed,
+        };
         let out = stats.run("photons.indirect", why, |_| {
-            let spec = PassSpec {
-                pass: Pass::Indirect,
-                n: p.photons,
-                color: p.color,
-                max_bounces: p.max_bounces,
-                targets: &[],
-                aim: false,
-                guide: guide.emission.as_ref(),
-                portals,
-                seed,
-            };
-            trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress)
+            trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec(p.photons, seed), progress)
         });
         progress.finish();
         stats.rays.photon += out.rays;
@@ -212,17 +213,7 @@ impl MapStages<'_> {
                     "{n} indirect paths traced for where they land: sites independent of the map's photons"
                 );
                 let sites = stats.run("photons.indirect_sites", why, |stats| {
-                    let spec = PassSpec {
-                        pass: Pass::Indirect,
-                        n,
-                        color: p.color,
-                        max_bounces: p.max_bounces,
-                        targets: &[],
-                        aim: false,
-                        guide: guide.emission.as_ref(),
-                        portals,
-                        seed: seed ^ 0x517E,
-                    };
+                    let spec = spec(n, seed ^ 0x517E);
                     let out = trace::trace_pass(frame.scene, frame.accel, frame.lights, &spec, progress);
                     stats.rays.photon += out.rays;
                     irradiance::pick_sites(&out.maps, 1)

@@ -296,6 +296,26 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_pcg::Pcg32;
 
+    /// The first probe's angle and the probes' end points of a random footprint of radius
+    /// `r`: each probe reaches the rim (and beyond, to the polygon circumscribing the disc),
+    /// stops at once, or stops anywhere between.
+    fn random_probes(rng: &mut Pcg32, r: f32) -> (f32, [Vec2; PROBES]) {
+        let step = std::f32::consts::TAU / PROBES as f32;
+        let far = r / (0.5 * step).cos();
+        let theta0 = rng.gen::<f32>() * step;
+        let mut ends = [Vec2::ZERO; PROBES];
+        for (j, end) in ends.iter_mut().enumerate() {
+            let reach = match rng.gen_range(0..4) {
+                0 => far,
+                1 => 0.0,
+                _ => rng.gen::<f32>() * far,
+            };
+            let (sin, cos) = (theta0 + step * j as f32).sin_cos();
+            *end = Vec2::new(cos, sin) * reach;
+        }
+        (theta0, ends)
+    }
+
     /// The footprint's area (`share`) is the share of the disc where `contains` says yes, for
     /// polygons of every kind (probes that reach the rim, stop at a wall, or find nothing), so
     /// that photons counted and area divided by agree: the estimate's unbiasedness rests on it.
@@ -306,17 +326,7 @@ mod tests {
         let step = std::f32::consts::TAU / PROBES as f32;
         let far = r / (0.5 * step).cos();
         for case in 0..50 {
-            let theta0 = rng.gen::<f32>() * step;
-            let mut ends = [Vec2::ZERO; PROBES];
-            for (j, end) in ends.iter_mut().enumerate() {
-                let reach = match rng.gen_range(0..4) {
-                    0 => far,
-                    1 => 0.0,
-                    _ => rng.gen::<f32>() * far,
-                };
-                let (sin, cos) = (theta0 + step * j as f32).sin_cos();
-                *end = Vec2::new(cos, sin) * reach;
-            }
+            let (theta0, ends) = random_probes(&mut rng, r);
             let area: f32 = (0..PROBES).map(|j| wedge_area(ends[j], ends[(j + 1) % PROBES], r)).sum();
             let share = area / (std::f32::consts::PI * r * r);
             let fp = Footprint::cut([Vec3::X, Vec3::Z], theta0, ends, r * r);
@@ -361,21 +371,9 @@ mod tests {
         use super::super::kernel::kernel_weight;
         let mut rng = Pcg32::seed_from_u64(11);
         let r = 0.4f32;
-        let step = std::f32::consts::TAU / PROBES as f32;
-        let far = r / (0.5 * step).cos();
         for kernel in [Kernel::Box, Kernel::Cone, Kernel::Gaussian] {
             for case in 0..30 {
-                let theta0 = rng.gen::<f32>() * step;
-                let mut ends = [Vec2::ZERO; PROBES];
-                for (j, end) in ends.iter_mut().enumerate() {
-                    let reach = match rng.gen_range(0..4) {
-                        0 => far,
-                        1 => 0.0,
-                        _ => rng.gen::<f32>() * far,
-                    };
-                    let (sin, cos) = (theta0 + step * j as f32).sin_cos();
-                    *end = Vec2::new(cos, sin) * reach;
-                }
+                let (theta0, ends) = random_probes(&mut rng, r);
                 let fp = Footprint::cut([Vec3::X, Vec3::Z], theta0, ends, r * r);
                 let n = 40_000;
                 let mut weight = 0.0f64;
