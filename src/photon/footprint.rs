@@ -192,9 +192,30 @@ pub struct Clear {
 }
 
 impl Clear {
-    /// The disc of squared radius `r2` about `p` (normal `n`), found whole.
-    pub fn new(p: Vec3, n: Vec3, r2: f32) -> Self {
-        Clear { p, n, r2 }
+    /// The footprint of the disc of squared radius `r2` about `p` (normal `n`): whole where
+    /// `last` covers it; else probed `CLEAR` times wider (`probe(wide r2)`), cut back to `r2`,
+    /// and kept in `last` where the probes found the wider disc whole, so that nearby discs on
+    /// the same surface need no probes of their own.
+    pub fn or_probe(
+        last: &mut Option<Clear>,
+        p: Vec3,
+        n: Vec3,
+        r2: f32,
+        probe: impl FnOnce(f32) -> Footprint,
+    ) -> Footprint {
+        if last.is_some_and(|c| c.covers(p, n, r2)) {
+            return Footprint::whole(r2);
+        }
+        let wide = probe(CLEAR * CLEAR * r2);
+        if !wide.cut {
+            *last = Some(Clear { p, n, r2: wide.r2 });
+            return Footprint::whole(r2);
+        }
+        if wide.r2 <= r2 {
+            wide
+        } else {
+            wide.within(r2 / wide.r2)
+        }
     }
 
     /// Whether the disc of squared radius `r2` about `p`, normal `n`, lies within this one on

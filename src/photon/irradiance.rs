@@ -17,7 +17,7 @@
 //! estimated, 78 % of the Cornell box's: `--stats`, `irradiance_cache`). A block's values depend only on its sites and the maps,
 //! so they are the same whichever thread estimates them and whenever.
 
-use super::footprint::{Clear, Footprint, Footprints, CLEAR};
+use super::footprint::{Clear, Footprint, Footprints};
 use super::kdtree::{KdPoint, KdTree, Neighbor};
 use super::map::{GatherParams, Hits, PhotonMap};
 use super::pack;
@@ -361,28 +361,15 @@ impl PrecomputedIrradiance {
                 let maps = source.indirect.len();
                 let clear = &mut clear;
                 let mut footprints = source.probe.map(|probe| {
-                    Footprints::new(
-                        move |back: bool, r2: f32| {
-                            // Probed `CLEAR` times wider, so that the block's next sites within
-                            // a disc found whole on the same side need no probes of their own.
-                            let side = if back { -n } else { n };
-                            let whole = &mut clear[usize::from(back)];
-                            if whole.is_some_and(|c| c.covers(pos, side, r2)) {
-                                return Footprint::whole(r2);
-                            }
-                            let wide = probe(first + j, &point(), back, CLEAR * CLEAR * r2);
-                            if !wide.cut {
-                                *whole = Some(Clear::new(pos, side, wide.r2));
-                                return Footprint::whole(r2);
-                            }
-                            if wide.r2 <= r2 {
-                                wide
-                            } else {
-                                wide.within(r2 / wide.r2)
-                            }
-                        },
-                        maps,
-                    )
+                    // The block's next sites within a disc found whole on the same side
+                    // need no probes of their own.
+                    let at = move |back: bool, r2: f32| {
+                        let side = if back { -n } else { n };
+                        Clear::or_probe(&mut clear[usize::from(back)], pos, side, r2, |wide| {
+                            probe(first + j, &point(), back, wide)
+                        })
+                    };
+                    Footprints::new(at, maps)
                 });
                 for (m, guess) in source.indirect.iter().zip(&mut guesses) {
                     let [f, b] = match &mut footprints {
