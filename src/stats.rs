@@ -102,6 +102,21 @@ pub struct Stats {
     /// choice; `None` with other integrators).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub widening: Option<Widening>,
+    /// How many camera samples pass-indexed progressive photon mapping's pilot chose for each
+    /// pass (`None` where it did not choose: other integrators, `--spp` given, short renders).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pass_samples: Option<PassSamples>,
+}
+
+/// The pilot's choice of camera samples per pass (`src/integrator/balance.rs`).
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct PassSamples {
+    /// Camera samples per pixel in each pass.
+    pub spp: u32,
+    /// The camera samples' share of a pass's estimated variance at that many samples.
+    pub camera_share: f64,
+    /// The price of a pass's photon term in camera samples over the image.
+    pub fixed_in_samples: f64,
 }
 
 /// What the pilot of pass-indexed progressive photon mapping made of the first radii

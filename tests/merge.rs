@@ -126,6 +126,23 @@ fn pppm_parts_merge_to_the_one_process_image_bit_for_bit() {
     merged_equals_one_process("pppm");
 }
 
+/// A render of 16 passes or more without `--spp` lets pppm's pilot choose the camera samples of
+/// a pass and widen the first radii (`src/integrator/balance.rs`, `bandwidth.rs`): each part's
+/// pilot makes the same choices from the render's seed, so the parts still merge bit for bit.
+#[test]
+fn pppm_parts_with_the_pilots_choices_merge_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let cornell = scene("cornell");
+    let s: Vec<String> = settings("pppm", 16).into_iter().filter(|a| a != "--spp" && a != "2").collect();
+    assert!(!s.contains(&"--spp".to_string()), "{s:?}");
+    let single = dir.path().join("single.exr");
+    ok(render(&cornell, &s, None, &single));
+    let files = parts(dir.path(), &cornell, &s, &["0..5", "5..16"]);
+    let out = dir.path().join("merged.exr");
+    ok(merge(&[&files[1], &files[0]], &out, &[]));
+    assert_eq!(bits(&out), bits(&single));
+}
+
 #[test]
 fn photon_map_parts_merge_to_the_one_process_image_bit_for_bit() {
     merged_equals_one_process("photon");

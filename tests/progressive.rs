@@ -96,6 +96,44 @@ fn pppm_is_deterministic_across_thread_counts() {
     assert_eq!(run(1), run(2));
 }
 
+/// Without `--spp`, a long pppm render's pilot chooses the camera samples of a pass from where
+/// the noise is (`src/integrator/balance.rs`): many where its photon term is quiet and costly
+/// (many photons a pass, wide gathers), few where it is noisy and cheap; the passes take them;
+/// `--spp` given, or a short render, keeps the samples asked for. The choice depends on the
+/// seed only: the same image on one thread and on two.
+#[test]
+fn pppm_chooses_its_camera_samples_where_the_noise_is() {
+    let s = scene("cornell");
+    let pppm = |photons: u64, k: u32| RenderSettings {
+        integrator: Some(IntegratorKind::Pppm),
+        passes: Some(16),
+        photons: Some(photons),
+        gather_photons: Some(k),
+        seed: Some(3),
+        ..Default::default()
+    };
+    let run = |settings: &RenderSettings| render_checked(&s, settings, 32);
+    let quiet = run(&pppm(40_000, 200));
+    let noisy = run(&pppm(2_000, 5));
+    let (many, few) = (quiet.stats.pass_samples.unwrap(), noisy.stats.pass_samples.unwrap());
+    eprintln!("quiet photons: {many:?}\nnoisy photons: {few:?}");
+    assert!(many.spp > 2 * few.spp && few.spp >= 4, "{} against {}", many.spp, few.spp);
+    assert!(many.camera_share > 0.0 && many.camera_share < 1.0, "{many:?}");
+    assert!(many.fixed_in_samples > few.fixed_in_samples, "{many:?} {few:?}");
+    // The passes take them: 16 passes of `spp` camera rays and one visible point a pixel, and
+    // the pilot's 4 and one.
+    for (out, spp) in [(&quiet, many.spp), (&noisy, few.spp)] {
+        let pixels = 32 * 32;
+        assert_eq!(out.stats.rays.camera, (16 * (spp as u64 + 1) + 5) * pixels, "spp {spp}");
+    }
+    // Asked for, or too short to measure: not chosen.
+    let asked = RenderSettings { spp: Some(4), ..pppm(40_000, 200) };
+    assert_eq!(run(&asked).stats.pass_samples, None);
+    assert_eq!(run(&RenderSettings { passes: Some(8), ..pppm(40_000, 200) }).stats.pass_samples, None);
+    let image = |threads| common::on_threads(threads, || run(&pppm(2_000, 5)).film);
+    assert_eq!(image(1), image(2));
+}
+
 /// Passes of the path tracer average (4 passes of 4 samples: measured 0.130 → 0.049, the
 /// camera samples of the passes together staying stratified), and the stats count them.
 #[test]

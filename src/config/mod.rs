@@ -164,6 +164,10 @@ pub struct ProgressiveConfig {
     pub alpha: f32,
     pub light_samples: u32,
     pub max_depth: u32,
+    /// Whether pass-indexed progressive photon mapping chooses its camera samples per pass
+    /// (no `--spp` given; `src/integrator/balance.rs`), in renders long enough for its pilot
+    /// to measure them.
+    pub auto_samples: bool,
 }
 
 /// The path tracer.

@@ -66,7 +66,8 @@ impl RenderSettings {
                     return Err(bad("component", "progressive photon mapping renders the whole sum only"));
                 }
                 let alpha = self.alpha.unwrap_or(0.7);
-                let c = ProgressiveConfig { maps, gathers, alpha, light_samples, max_depth };
+                let auto_samples = self.spp.is_none();
+                let c = ProgressiveConfig { maps, gathers, alpha, light_samples, max_depth, auto_samples };
                 match kind {
                     IntegratorKind::Sppm => Integrator::Progressive(c),
                     _ => Integrator::PassIndexed(c),

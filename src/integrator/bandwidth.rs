@@ -29,7 +29,8 @@
 //! (`MEASURE2`; cut to the surface's footprint as the passes' gathers are) and the disc of half
 //! its area: `2 (L_R − L_{R/√2})` is the bias at `R` (as in the passes' own bias probe,
 //! [`super::pppm`]) and a ninth of it the bias at `r_1`; `V` comes from the photons within
-//! `r_1`, `Σ flux² / area²`; `C` from the spread of the pixel's camera samples. From `b`'s
+//! `r_1`, `Σ flux² / area²`; `C` from the spread of the pixel's camera samples (what is random in them after the camera
+//! ray, `sppm::camera_noise`). From `b`'s
 //! estimate `b̂`, `b̂² − var(b̂)` estimates `b²` without bias; its noise at one pixel is still
 //! about `V / 130` where the radius widens fully below `b² = V / 600` and not at all above
 //! `V / 10`, so each pixel pools `b²` and `V` over the pixels of a square window about it
@@ -69,6 +70,12 @@ pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
     (1..=pass as u64).map(|j| (j as f64 + alpha) / (j as f64 + 1.0)).product::<f64>() as f32
 }
 
+/// `ρ̄`, the mean over the passes the widening is chosen for of `r²_1 / r²_i`: how much more
+/// variance a pass's photon term has on average than at the first radius.
+pub(super) fn mean_inverse_scale(alpha: f32) -> f64 {
+    Model::new(alpha).rho
+}
+
 /// Whether a render is long enough for the pilot's measuring (about 0.4 s on the shipped
 /// scenes at 256², against 0.13 s for the first radii alone) to pay: 16 passes or more, or a
 /// time budget of 10 s or more, or a target error (as many passes as it takes). At 2 s the
@@ -104,7 +111,8 @@ pub(super) struct Spread {
     /// An estimate of one pass's variance at `r_1` (summed over the channels).
     pub var: f64,
     /// An estimate of the variance of one pass's camera samples' mean (emission and direct
-    /// light; summed over the channels): what widening does not reduce.
+    /// light; summed over the channels), from what is random after the camera rays
+    /// (`sppm::camera_noise`): what widening does not reduce.
     pub camera: f64,
     /// The most the squared radius may widen before the disc reaches a wall or an edge
     /// (`WIDEST2` where the measured disc lay whole on the surface).

@@ -6,6 +6,7 @@
 //! accelerator, lights, camera samples, the specular walk, direct light — is the
 //! [`frame`](crate::frame).
 
+pub mod balance;
 pub mod bandwidth;
 pub mod maps;
 pub mod openings;
