@@ -6,7 +6,8 @@
 # Usage: bash scripts/converge.sh [REFS_DIR] [BUDGETS] [METHODS]
 #   REFS_DIR  directory of the reference EXRs (default ../shared/scenes/refs)
 #   BUDGETS   seconds, comma-separated (default 1,2,5,10,20,45: the peers' 5, 20 and 45 s among them)
-#   METHODS   comma-separated (default all: photon-rgb,photon-channel,final-gather,sppm,path)
+#   METHODS   comma-separated (default: photon-rgb,photon-channel,final-gather,sppm,path; also
+#             photon-default, the two-pass defaults `render --time` runs, and pppm)
 # SCENES="cornell caustics" limits the scenes (a variant such as sunroom-portal is found beside
 # its scene; REF_sunroom_portal=sunroom names its reference); OUT=dir changes the output directory.
 set -euo pipefail

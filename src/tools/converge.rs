@@ -25,6 +25,9 @@ crate::choice! {
         /// Two-pass photon mapping, RGB photons, radiance estimate (200k + 50k photons, 16 spp a
         /// pass).
         PhotonRgb = "photon-rgb",
+        /// Two-pass photon mapping at its defaults (1M + 300k photons, 64 spp a pass): what
+        /// `photonmap render --time` runs.
+        PhotonDefault = "photon-default",
         /// The same with the lecture's three per-channel maps.
         PhotonChannel = "photon-channel",
         /// Two-pass photon mapping with final gathering (200k + 50k photons, 4 spp x 16 rays a
@@ -53,6 +56,9 @@ impl Method {
         };
         match self {
             Method::PhotonRgb => photon,
+            Method::PhotonDefault => {
+                RenderSettings { integrator: Some(IntegratorKind::Photon), ..Default::default() }
+            }
             Method::PhotonChannel => RenderSettings { color: Some(ColorMode::PerChannel), ..photon },
             Method::FinalGather => RenderSettings {
                 indirect: Some(IndirectMode::FinalGather),
@@ -380,6 +386,21 @@ pub fn plot(points: &[Point], peers: &[Peer], title: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::{Integrator, RenderConfig};
+
+    /// `photon-default` is what `photonmap render --time` runs: the defaults, nothing else;
+    /// `photon-rgb` its smaller passes.
+    #[test]
+    fn photon_default_is_the_render_default() {
+        let resolve = |s: RenderSettings| -> RenderConfig { s.resolve(64, 64).unwrap() };
+        let default = resolve(RenderSettings::default());
+        assert_eq!(resolve(Method::PhotonDefault.settings()), default);
+        let Integrator::Photon(small) = resolve(Method::PhotonRgb.settings()).integrator else {
+            panic!("photon-rgb is two-pass photon mapping")
+        };
+        let Integrator::Photon(full) = default.integrator else { panic!("the default is two-pass") };
+        assert!(small.maps.photons < full.maps.photons);
+    }
 
     fn point(method: Method, seconds: f64, rmse: f64) -> Point {
         Point {
