@@ -232,7 +232,8 @@ fn choose_samples(
     let photons = found.iter().zip(widening).map(|(f, u)| f.photon_var * rho / u as f64).sum::<f64>() / n;
     let s = balance::samples(camera, photons, work);
     let (fixed, per_sample) = work.prices();
-    let camera_share = camera / s as f64 / (camera / s as f64 + photons);
+    let per_pass = camera / s as f64 + photons;
+    let camera_share = if per_pass > 0.0 { camera / s as f64 / per_pass } else { 0.0 };
     PassSamples { spp: s, camera_share, fixed_in_samples: fixed / per_sample }
 }
 
