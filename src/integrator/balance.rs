@@ -96,16 +96,10 @@ pub(super) fn samples(camera: f64, photons: f64, work: &PassWork) -> u32 {
 mod tests {
     use super::*;
 
+    /// A pass whose fixed price is `fixed_rays` camera rays (all of it probes).
     fn work(fixed_rays: u64, sample_rays: f64) -> PassWork {
-        PassWork { photon_rays: 0, stored: 0, points: 0, probe_rays: 0, sample_rays }.with_fixed(fixed_rays)
-    }
-
-    impl PassWork {
-        fn with_fixed(mut self, rays: u64) -> Self {
-            // A fixed price of `rays` camera rays, all of it probes.
-            self.probe_rays = (rays as f64 / PROBE_RAY).round() as u64;
-            self
-        }
+        let probe_rays = (fixed_rays as f64 / PROBE_RAY).round() as u64;
+        PassWork { probe_rays, sample_rays, ..Default::default() }
     }
 
     /// The choice is the least of `(C/s + V)(F + sS)`: `√(C F / (V S))` where that lies
