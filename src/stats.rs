@@ -102,17 +102,23 @@ pub struct Stats {
     /// choice; `None` with other integrators).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub widening: Option<Widening>,
-    /// How many camera samples pass-indexed progressive photon mapping's pilot chose for each
-    /// pass (`None` where it did not choose: other integrators, `--spp` given, short renders).
+    /// The photons and camera samples pass-indexed progressive photon mapping's pilot chose for
+    /// each pass (`None` where it chose neither: other integrators, `--spp` and `--photons`
+    /// given, short renders).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub pass_samples: Option<PassSamples>,
+    pub pass_plan: Option<PassPlan>,
 }
 
-/// The pilot's choice of camera samples per pass (`src/integrator/balance.rs`).
+/// The pilot's choice of the photons and camera samples of every pass
+/// (`src/integrator/balance.rs`).
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
-pub struct PassSamples {
+pub struct PassPlan {
     /// Camera samples per pixel in each pass.
     pub spp: u32,
+    /// Photons each pass emits for its indirect map.
+    pub photons: u64,
+    /// Photons each pass aims at specular objects for its caustic map.
+    pub caustic_photons: u64,
     /// The camera samples' share of a pass's estimated variance at that many samples.
     pub camera_share: f64,
     /// The price of a pass's photon term in camera samples over the image.

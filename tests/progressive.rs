@@ -115,7 +115,7 @@ fn pppm_chooses_its_camera_samples_where_the_noise_is() {
     let run = |settings: &RenderSettings| render_checked(&s, settings, 32);
     let quiet = run(&pppm(40_000, 200));
     let noisy = run(&pppm(2_000, 5));
-    let (many, few) = (quiet.stats.pass_samples.unwrap(), noisy.stats.pass_samples.unwrap());
+    let (many, few) = (quiet.stats.pass_plan.unwrap(), noisy.stats.pass_plan.unwrap());
     eprintln!("quiet photons: {many:?}\nnoisy photons: {few:?}");
     assert!(many.spp > 2 * few.spp && few.spp >= 4, "{} against {}", many.spp, few.spp);
     assert!(many.camera_share > 0.0 && many.camera_share < 1.0, "{many:?}");
@@ -128,9 +128,42 @@ fn pppm_chooses_its_camera_samples_where_the_noise_is() {
     }
     // Asked for, or too short to measure: not chosen.
     let asked = RenderSettings { spp: Some(4), ..pppm(40_000, 200) };
-    assert_eq!(run(&asked).stats.pass_samples, None);
-    assert_eq!(run(&RenderSettings { passes: Some(8), ..pppm(40_000, 200) }).stats.pass_samples, None);
+    assert_eq!(run(&asked).stats.pass_plan, None);
+    assert_eq!(run(&RenderSettings { passes: Some(8), ..pppm(40_000, 200) }).stats.pass_plan, None);
     let image = |threads| common::on_threads(threads, || run(&pppm(2_000, 5)).film);
+    assert_eq!(image(1), image(2));
+}
+
+/// Without `--photons` or `--caustic-photons`, a long pppm render's pilot chooses the photons
+/// of a pass too (`src/integrator/balance.rs`): on the point-lit box, whose photon term is most
+/// of the image and whose pixels at 32x32 are far wider than their discs, more than the
+/// render's own; the passes trace them; `--photons` given keeps them; the same image on one
+/// thread and on two.
+#[test]
+fn pppm_chooses_its_photons_a_pass() {
+    let s = scene("pointlight");
+    let pppm = RenderSettings {
+        integrator: Some(IntegratorKind::Pppm),
+        passes: Some(16),
+        spp: Some(4),
+        seed: Some(3),
+        ..Default::default()
+    };
+    let run = |settings: &RenderSettings| render_checked(&s, settings, 32);
+    let out = run(&pppm);
+    let plan = out.stats.pass_plan.expect("the pilot chose the photons");
+    eprintln!("{plan:?}");
+    let m = plan.photons / 100_000;
+    assert_eq!((plan.photons, plan.caustic_photons, plan.spp), (m * 100_000, m * 30_000, 4));
+    assert!([2, 4, 8].contains(&m), "{plan:?}");
+    // The pilot's photons, then 16 passes' of m times as many (within the rounding of the
+    // photons' split over the lights).
+    let emitted = out.stats.photons["indirect"].emitted as i64;
+    assert!((emitted - (100_000 + 16 * plan.photons) as i64).abs() <= 64, "{emitted}");
+    // Asked for: kept (and, with --spp too, nothing chosen).
+    let asked = RenderSettings { photons: Some(100_000), ..pppm.clone() };
+    assert_eq!(run(&asked).stats.pass_plan, None);
+    let image = |threads| common::on_threads(threads, || run(&pppm).film);
     assert_eq!(image(1), image(2));
 }
 

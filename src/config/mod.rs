@@ -168,6 +168,9 @@ pub struct ProgressiveConfig {
     /// (no `--spp` given; `src/integrator/balance.rs`), in renders long enough for its pilot
     /// to measure them.
     pub auto_samples: bool,
+    /// Whether it chooses the photons a pass traces, a multiple of `maps`' (neither
+    /// `--photons` nor `--caustic-photons` given).
+    pub auto_photons: bool,
 }
 
 /// The path tracer.

@@ -67,7 +67,16 @@ impl RenderSettings {
                 }
                 let alpha = self.alpha.unwrap_or(0.7);
                 let auto_samples = self.spp.is_none();
-                let c = ProgressiveConfig { maps, gathers, alpha, light_samples, max_depth, auto_samples };
+                let auto_photons = self.photons.is_none() && self.caustic_photons.is_none();
+                let c = ProgressiveConfig {
+                    maps,
+                    gathers,
+                    alpha,
+                    light_samples,
+                    max_depth,
+                    auto_samples,
+                    auto_photons,
+                };
                 match kind {
                     IntegratorKind::Sppm => Integrator::Progressive(c),
                     _ => Integrator::PassIndexed(c),

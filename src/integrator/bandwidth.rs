@@ -70,12 +70,6 @@ pub fn radius2_scale(pass: u32, alpha: f32) -> f32 {
     (1..=pass as u64).map(|j| (j as f64 + alpha) / (j as f64 + 1.0)).product::<f64>() as f32
 }
 
-/// `ρ̄`, the mean over the passes the widening is chosen for of `r²_1 / r²_i`: how much more
-/// variance a pass's photon term has on average than at the first radius.
-pub(super) fn mean_inverse_scale(alpha: f32) -> f64 {
-    Model::new(alpha).rho
-}
-
 /// Whether a render is long enough for the pilot's measuring (about 0.4 s on the shipped
 /// scenes at 256², against 0.13 s for the first radii alone) to pay: 16 passes or more, or a
 /// time budget of 10 s or more, or a target error (as many passes as it takes). At 2 s the
@@ -120,6 +114,19 @@ pub(super) struct Spread {
     /// Whether the pixel was measured (a visible point with photons near it, on a surface at
     /// least as wide as the widest disc's footprint allows).
     pub measured: bool,
+    /// An unbiased estimate of the squared bias at `r_1`, from the photons within it (summed
+    /// over the channels; 0 where nothing was seen): of the caustic maps where measured, of the
+    /// whole photon term where not: what keeps a pass's own `k`-th nearest photon, `m` times
+    /// nearer in area when a pass traces `m` times the photons. Its square is taken to fall as
+    /// `1 / m`, as the bias of a disc cut by a wall or an edge does (it grows with the radius,
+    /// not the area): measured, the doorway's pixels by its walls lost 0.46 of it at 4× the
+    /// photons, the atrium's 0.69.
+    pub fixed2: f64,
+    /// The variance at `r_1` of what keeps a pass's own `k`-th nearest photon where measured
+    /// (the caustic maps: their discs hold `k` photons whatever the photons a pass, and their
+    /// variance does not fall with more; summed over the channels). Where not measured, `var`
+    /// is all of it.
+    pub fixed_var: f64,
 }
 
 impl Spread {
@@ -198,33 +205,44 @@ impl Spread {
         if !(bias2.is_finite() && var.is_finite()) {
             return Spread::default();
         }
-        Spread { bias2, var, camera: 0.0, room, measured: true }
+        Spread { bias2, var, camera: 0.0, room, measured: true, fixed2: 0.0, fixed_var: 0.0 }
     }
 }
 
-/// Each pixel's widening `u = s²` of its squared first radius, from the spreads of the
-/// pixels in its window (row-major, `width` wide), for progressive radii shrinking with
-/// `alpha`. Pixels not measured keep `u = 1`.
-pub(super) fn widenings(spreads: &[Spread], width: usize, alpha: f32) -> Vec<f32> {
+/// Each pixel's widening `u` of its squared first radius (over the pilot's `k`-th nearest
+/// photon's), from the spreads of the pixels in its window (row-major, `width` wide), for the
+/// passes of `model`; and the image's mean squared error the model predicts with them. A pixel
+/// measured widens up to its `room`, and never narrows below the pilot's radius (its bias is
+/// measured over a disc nine times as wide: too coarse to narrow by); any other keeps a pass's
+/// own `k`-th nearest photon (`1 / m`), as caustics do: near a wall or an edge, where the bias
+/// grows with the radius itself and the pilot cannot measure it, more photons a pass are what
+/// shrinks it.
+pub(super) fn widenings(spreads: &[Spread], width: usize, model: &Model) -> Widened {
     let height = spreads.len() / width.max(1);
-    // Summed-area tables of the squared bias, the photons' variance and the pixels measured.
+    // Summed-area tables over the measured pixels (the squared bias, the photons' variance,
+    // the caustics' squared bias, how many) and over the others seen (the squared bias, the
+    // variance, how many).
     let (w1, h1) = (width + 1, height + 1);
-    let mut table = vec![[0f64; 3]; w1 * h1];
+    let mut table = vec![[0f64; 7]; w1 * h1];
     for y in 0..height {
-        let mut row = [0f64; 3];
+        let mut row = [0f64; 7];
         for x in 0..width {
             let s = &spreads[y * width + x];
             if s.measured {
-                row[0] += s.bias2;
-                row[1] += s.var;
-                row[2] += 1.0;
+                for (i, v) in [s.bias2, s.var, s.fixed2, 1.0].into_iter().enumerate() {
+                    row[i] += v;
+                }
+            } else if s.var > 0.0 {
+                for (i, v) in [s.fixed2, s.var, 1.0].into_iter().enumerate() {
+                    row[4 + i] += v;
+                }
             }
             let above = table[y * w1 + x + 1];
             table[(y + 1) * w1 + x + 1] = std::array::from_fn(|i| above[i] + row[i]);
         }
     }
-    // Each measured pixel's window means.
-    let mut pooled = vec![(0f64, 0f64); spreads.len()];
+    // Each pixel's window means over the pixels of its own kind.
+    let mut pooled = vec![Pooled::default(); spreads.len()];
     for y in 0..height {
         let (y0, y1) = (y.saturating_sub(WINDOW), (y + WINDOW + 1).min(height));
         for x in 0..width {
@@ -232,124 +250,220 @@ pub(super) fn widenings(spreads: &[Spread], width: usize, alpha: f32) -> Vec<f32
             let at = |x: usize, y: usize| table[y * w1 + x];
             let (a, b, c, d) = (at(x1, y1), at(x0, y1), at(x1, y0), at(x0, y0));
             let sum = |i: usize| a[i] - b[i] - c[i] + d[i];
-            let n = sum(2).max(1.0);
-            pooled[y * width + x] = (sum(0) / n, sum(1) / n);
+            let s = &spreads[y * width + x];
+            pooled[y * width + x] = if s.measured {
+                let n = sum(3).max(1.0);
+                Pooled { bias2: sum(0) / n, var: sum(1) / n, fixed2: sum(2) / n, least: 1.0, most: s.room }
+            } else if s.var > 0.0 {
+                let n = sum(6).max(1.0);
+                let least = model.least();
+                Pooled { bias2: 0.0, var: sum(5) / n, fixed2: sum(4) / n, least, most: least }
+            } else {
+                Pooled { least: model.least(), most: model.least(), ..Pooled::default() }
+            };
         }
     }
-    let model = Model::new(alpha);
-    let mut out = vec![1.0f32; spreads.len()];
+    let mut out: Vec<f32> = pooled.iter().map(|p| p.least).collect();
     // The widening of one pixel slows every pixel's passes: each pixel's choice weighs the
     // image's mean variance, which depends on every choice; a few rounds settle it.
     for _ in 0..ROUNDS {
         let image = model.image(spreads, &out);
-        out = spreads
+        out = pooled
             .iter()
-            .zip(&pooled)
-            .map(
-                |(s, &(bias2, var))| {
-                    if s.measured {
-                        model.widening(bias2, var, image).min(s.room)
-                    } else {
-                        1.0
-                    }
-                },
-            )
+            .map(|p| model.widening(p.bias2, p.var, image, p.least, p.most.max(p.least)))
             .collect();
     }
-    out
+    let image = model.image(spreads, &out);
+    let n = spreads.len().max(1) as f64;
+    let (sigma, m) = (model.sigma, model.passes.photons);
+    let bias2 = pooled
+        .iter()
+        .zip(&out)
+        .map(|(p, &u)| (u as f64 * sigma).powi(2) * p.bias2.max(0.0) + sigma * sigma / m * p.fixed2.max(0.0))
+        .sum::<f64>()
+        / n;
+    Widened { mse: bias2 + image.var * image.slower / model.passes.n, u: out }
+}
+
+/// A pixel's window's means: the squared bias at `r_1` of what its radius changes, its
+/// photons' variance, the squared bias of what keeps a pass's own `k`-th nearest photon (the
+/// caustics), and the narrowest and widest its squared radius may be (over `r²_1`).
+#[derive(Clone, Copy, Debug, Default)]
+struct Pooled {
+    bias2: f64,
+    var: f64,
+    fixed2: f64,
+    least: f32,
+    most: f32,
+}
+
+/// Each pixel's widening and what the model predicts of the image with them.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Widened {
+    /// Each pixel's squared first radius over the pilot's `k`-th nearest photon's.
+    pub u: Vec<f32>,
+    /// The image's mean squared error (summed over the channels) after the reference time.
+    pub mse: f64,
 }
 
 /// Rounds of [`widenings`]' choice (each pixel's given the others').
 const ROUNDS: usize = 4;
 
-/// What the widenings came to, for `--stats`: their mean (of the radius, `√u`) and how many
-/// pixels were widest, over the pixels measured.
-pub(super) fn summary(widen: &[f32], spreads: &[Spread]) -> Widening {
-    let measured: Vec<f32> = widen.iter().zip(spreads).filter(|(_, s)| s.measured).map(|(u, _)| *u).collect();
+/// What the widenings came to, for `--stats`: their mean (of the radius over a pass's own
+/// `k`-th nearest photon's, `√(m u)`) and how many pixels were widest, over the pixels
+/// measured.
+pub(super) fn summary(widen: &[f32], spreads: &[Spread], photons: f64) -> Widening {
+    let measured: Vec<f64> =
+        widen.iter().zip(spreads).filter(|(_, s)| s.measured).map(|(u, _)| *u as f64 * photons).collect();
     let n = measured.len().max(1) as f64;
     Widening {
         pixels: measured.len() as u64,
-        mean: measured.iter().map(|u| (*u as f64).sqrt()).sum::<f64>() / n,
-        widest: measured.iter().filter(|u| **u >= WIDEST2).count() as f64 / n,
+        mean: measured.iter().map(|u| u.sqrt()).sum::<f64>() / n,
+        widest: measured.iter().filter(|u| **u >= WIDEST2 as f64 * photons * 0.999).count() as f64 / n,
     }
 }
 
-/// How much longer a pass takes per unit of widening: a widened gather visits `u` times the
-/// photons, and a pass takes `1 + GATHER_COST (u − 1)` times as long, so fewer passes fit in
-/// the time. Measured with `--stats` on 20–30 passes before and after widening nearly every
-/// pixel fully (`u` about 3.8): the white furnace's passes took 1.16× as long per unit of
+/// The passes the widening is chosen for, in the reference time (`PASSES` passes of the
+/// pilot's own kind, unwidened).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Passes {
+    /// How many fit in the reference time, their gathers at the `k`-th nearest photon.
+    pub n: f64,
+    /// The photons each traces over the pilot's, `m`: the `k`-th nearest photon lies `m`
+    /// times nearer in area, and a disc of the same radius gathers `m` times the photons.
+    pub photons: f64,
+    /// How much longer a pass takes per unit of `m ū − 1` (`ū` the image's mean widening):
+    /// its indirect gathers' time at the `k`-th nearest photon over the pass's.
+    pub gather: f64,
+}
+
+impl Passes {
+    /// The pilot's own passes: `PASSES` of its photons, their gathers' price [`GATHER_COST`].
+    pub(super) fn pilot() -> Passes {
+        Passes::new(1.0, 1.0, GATHER_COST)
+    }
+
+    /// The passes that fit in the reference time when each takes `slower` times as long as
+    /// the pilot's, traces `photons` times its photons, and gathers at a price `gather`.
+    pub(super) fn new(slower: f64, photons: f64, gather: f64) -> Passes {
+        Passes { n: PASSES as f64 / slower, photons, gather }
+    }
+}
+
+/// How much longer a pass takes per unit of widening where the pass's prices were not counted:
+/// a widened gather visits `u` times the photons, and a pass takes `1 + GATHER_COST (u − 1)`
+/// times as long. Measured with `--stats` on 20–30 passes before and after widening nearly
+/// every pixel fully (`u` about 3.8): the white furnace's passes took 1.16× as long per unit of
 /// `u − 1` in the camera stage (0.12 over the whole pass, photons and kd-tree included), the
 /// caustics scene's 1.10× (0.06).
 const GATHER_COST: f64 = 0.1;
 
 /// The squared error of the mean of the passes a time allows as a function of the widening.
-struct Model {
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) struct Model {
+    passes: Passes,
     /// `σ̄`, the mean of `r²_i / r²_1` over the passes.
     sigma: f64,
     /// `ρ̄`, the mean of `r²_1 / r²_i`.
-    rho: f64,
+    pub(super) rho: f64,
 }
 
 /// What every pixel's choice shares: how much longer the passes take, and the image's mean
 /// variance (per pass) that each unit of that costs.
 #[derive(Clone, Copy, Debug)]
 struct Image {
-    /// The passes' time over the unwidened passes' (`1 + GATHER_COST (ū − 1)`).
+    /// The passes' time over the passes' at the `k`-th nearest photon (`1 + g (m ū − 1)`).
     slower: f64,
     /// The mean over the image of one pass's variance (camera samples and photons).
     var: f64,
 }
 
 impl Model {
-    fn new(alpha: f32) -> Self {
-        let n = PASSES as f64;
+    /// The model of `passes` whose radii shrink with `alpha`.
+    pub(super) fn new(alpha: f32, passes: Passes) -> Self {
+        let count = passes.n.round().clamp(1.0, 1e6) as u32;
+        let n = count as f64;
         let (mut sigma, mut rho) = (0.0, 0.0);
-        for i in 0..PASSES {
+        for i in 0..count {
             let s = radius2_scale(i, alpha) as f64;
             sigma += s / n;
             rho += 1.0 / (s * n);
         }
-        Model { sigma, rho }
+        Model { passes, sigma, rho }
+    }
+
+    /// The narrowest widening: a pass's own `k`-th nearest photon, `1 / m`.
+    fn least(&self) -> f32 {
+        (1.0 / self.passes.photons) as f32
     }
 
     /// What the widenings `u` make of the whole image.
     fn image(&self, spreads: &[Spread], u: &[f32]) -> Image {
         let n = spreads.len().max(1) as f64;
+        let m = self.passes.photons;
         let mean_u = u.iter().map(|&u| u as f64).sum::<f64>() / n;
-        let var = spreads
-            .iter()
-            .zip(u)
-            .map(|(s, &u)| s.camera + if s.measured { s.var * self.rho / u as f64 } else { 0.0 })
-            .sum::<f64>()
-            / n;
-        Image { slower: 1.0 + GATHER_COST * (mean_u - 1.0), var }
+        let var = spreads.iter().zip(u).map(|(s, &u)| s.camera + self.photon_var(s, u)).sum::<f64>() / n;
+        Image { slower: 1.0 + self.passes.gather * (m * mean_u - 1.0), var }
     }
 
-    /// A pixel's part of the image's squared error at widening `u` (`PASSES` passes in the
-    /// time, unwidened), for its squared bias `bias2` and its photons' variance `var` at `r_1`:
-    /// its bias, its photons' noise, and what its wider gathers take from every pixel's passes
-    /// (`image.var` per pass more of the time, for each unit of `u`).
+    /// The variance of one pass's photon term at a pixel of spread `s` widened `u` times.
+    pub(super) fn photon_var(&self, s: &Spread, u: f32) -> f64 {
+        (s.var / (self.passes.photons * u as f64) + s.fixed_var) * self.rho
+    }
+
+    /// A pixel's part of the image's squared error at widening `u` (`n` passes in the time at
+    /// the `k`-th nearest photon), for its squared bias `bias2` and its photons' variance `var`
+    /// at the pilot's `r_1`: its bias, its photons' noise, and what its wider gathers take from
+    /// every pixel's passes (`image.var` per pass more of the time, for each unit of `m u`).
+    #[cfg(test)]
     fn mse(&self, u: f64, bias2: f64, var: f64, image: Image) -> f64 {
-        let n = PASSES as f64;
-        let bias = u * self.sigma;
-        bias * bias * bias2.max(0.0)
-            + var * self.rho * image.slower / (u * n)
-            + GATHER_COST * image.var * u / n
+        let (a, b, d) = self.terms(bias2, var, image);
+        a * u * u + b / u + d * u
     }
 
-    /// The widening in `[1, WIDEST2]` (in 64 steps) of least squared error for the pooled
-    /// `bias2` and `var`.
-    fn widening(&self, bias2: f64, var: f64, image: Image) -> f32 {
+    /// [`Self::mse`] as `a u² + b / u + d u`.
+    fn terms(&self, bias2: f64, var: f64, image: Image) -> (f64, f64, f64) {
+        let Passes { n, photons: m, gather } = self.passes;
+        let a = self.sigma * self.sigma * bias2.max(0.0);
+        let b = var * self.rho * image.slower / (m * n);
+        let d = gather * m * image.var / n;
+        (a, b, d)
+    }
+
+    /// The widening in `[least, most]` of least squared error for the pooled `bias2` and
+    /// `var`: `a u² + b / u + d u` is convex, and its slope `2 a u + d − b / u²` has one root
+    /// on `u > 0`, found by Newton's method from above (where the slope is convex and
+    /// increasing, it never overshoots).
+    fn widening(&self, bias2: f64, var: f64, image: Image, least: f32, most: f32) -> f32 {
+        let least = least as f64;
+        let most = (most.min(WIDEST2) as f64).max(least);
         if !(var > 0.0) {
-            return 1.0;
+            return least as f32;
         }
-        let steps = 64;
-        let u = |j: u32| 1.0 + (WIDEST2 as f64 - 1.0) * j as f64 / steps as f64;
-        let best = (0..=steps).min_by(|&a, &b| {
-            let (ea, eb) = (self.mse(u(a), bias2, var, image), self.mse(u(b), bias2, var, image));
-            ea.total_cmp(&eb)
-        });
-        best.map_or(1.0, u) as f32
+        let (a, b, d) = self.terms(bias2, var, image);
+        let slope = |u: f64| 2.0 * a * u + d - b / (u * u);
+        if slope(least) >= 0.0 {
+            return least as f32;
+        }
+        if slope(most) <= 0.0 {
+            return most as f32;
+        }
+        // The root of h(u) = 2 a u³ + d u² − b (the slope times u²).
+        let mut u = most;
+        for _ in 0..40 {
+            let h = 2.0 * a * u * u * u + d * u * u - b;
+            let dh = 6.0 * a * u * u + 2.0 * d * u;
+            let next = u - h / dh;
+            if !(next.is_finite() && next < u) {
+                break;
+            }
+            let done = u - next < 1e-7 * u;
+            u = next.max(least);
+            if done {
+                break;
+            }
+        }
+        u as f32
     }
 }
 
@@ -370,36 +484,84 @@ mod tests {
     /// The widening is the least squared error in a fixed time: wide where the bias is small
     /// against the photons' noise, the `k`-th photon's where it is large, and less wide where
     /// the image's noise is mostly the camera samples' (which widening does not reduce), since
-    /// a wider gather takes time from every pixel.
+    /// a wider gather takes time from every pixel. With `m` times the photons a pass, it may
+    /// narrow to `1 / m`.
     #[test]
     fn the_widening_minimises_the_squared_error() {
-        let model = Model::new(0.7);
+        let model = Model::new(0.7, Passes::pilot());
         let n = PASSES as f64;
         let sigmas: Vec<f64> = (0..PASSES).map(|i| radius2_scale(i, 0.7) as f64).collect();
         assert!((model.sigma - sigmas.iter().sum::<f64>() / n).abs() < 1e-9);
         assert!((model.rho - sigmas.iter().map(|s| 1.0 / s).sum::<f64>() / n).abs() < 1e-9);
         let quiet = Image { slower: 1.0, var: 0.0 };
         let noisy = |var: f64| Image { slower: 1.2, var };
-        for (b2, v, image) in
-            [(1e-4, 1.0, quiet), (1e-2, 1.0, quiet), (0.05, 1.0, noisy(1.0)), (0.0, 1.0, noisy(30.0))]
-        {
-            let u = model.widening(b2, v, image) as f64;
-            let best = (0..=3000)
-                .map(|j| 1.0 + (WIDEST2 as f64 - 1.0) * j as f64 / 3000.0)
-                .map(|w| model.mse(w, b2, v, image))
-                .fold(f64::INFINITY, f64::min);
-            // Within the 64 steps' resolution of the best.
-            assert!(model.mse(u, b2, v, image) <= best * 1.001, "b² {b2} {image:?}: u {u}");
+        let more = Model::new(0.7, Passes { n: 20.0, photons: 4.0, gather: 0.05 });
+        for model in [model, more] {
+            for (b2, v, image) in [
+                (1e-4, 1.0, quiet),
+                (1e-2, 1.0, quiet),
+                (0.05, 1.0, noisy(1.0)),
+                (0.0, 1.0, noisy(30.0)),
+                (3.0, 1.0, noisy(1.0)),
+            ] {
+                let least = model.least();
+                let u = model.widening(b2, v, image, least, WIDEST2) as f64;
+                let best = (0..=30000)
+                    .map(|j| least as f64 + (WIDEST2 - least) as f64 * j as f64 / 30000.0)
+                    .map(|w| model.mse(w, b2, v, image))
+                    .fold(f64::INFINITY, f64::min);
+                assert!(model.mse(u, b2, v, image) <= best * 1.00001, "b² {b2} {image:?}: u {u}");
+            }
         }
+        let widest =
+            |model: &Model, b2: f64, v: f64, image: Image| model.widening(b2, v, image, 1.0, WIDEST2);
         // Flat light and nothing else to pay for: the widest; none of the photons' noise: none.
-        assert_eq!(model.widening(0.0, 1.0, quiet), WIDEST2);
-        assert_eq!(model.widening(-0.1, 1.0, quiet), WIDEST2);
-        assert_eq!(model.widening(0.1, 0.0, quiet), 1.0);
-        // Large bias: the k-th nearest photon's radius.
-        assert_eq!(model.widening(100.0, 1.0, quiet), 1.0);
+        assert_eq!(widest(&model, 0.0, 1.0, quiet), WIDEST2);
+        assert_eq!(widest(&model, -0.1, 1.0, quiet), WIDEST2);
+        assert_eq!(model.widening(0.0, 1.0, quiet, 1.0, 2.5), 2.5);
+        assert_eq!(widest(&model, 0.1, 0.0, quiet), 1.0);
+        // Large bias: the k-th nearest photon's radius, or with more photons a pass, a narrower one.
+        assert_eq!(widest(&model, 100.0, 1.0, quiet), 1.0);
+        assert_eq!(more.widening(1e6, 1.0, quiet, 0.25, 1.0), 0.25);
+        let u = more.widening(0.3, 1.0, quiet, 0.25, 1.0);
+        assert!(u > 0.25 && u < 1.0, "{u}");
         // Camera noise over the image holds the widening back.
-        assert!(model.widening(0.0, 1.0, noisy(300.0)) < model.widening(0.0, 1.0, noisy(3.0)));
-        assert_eq!(model.widening(0.0, 1.0, noisy(1e4)), 1.0);
+        assert!(widest(&model, 0.0, 1.0, noisy(300.0)) < widest(&model, 0.0, 1.0, noisy(3.0)));
+        assert_eq!(widest(&model, 0.0, 1.0, noisy(1e4)), 1.0);
+    }
+
+    /// A pixel not measured keeps a pass's own `k`-th nearest photon (`1 / m` with `m` times
+    /// the photons a pass); the error predicted counts its squared bias, which falls as `1 / m`,
+    /// and a measured pixel never narrows below the pilot's radius.
+    #[test]
+    fn pixels_not_measured_keep_a_pass_s_own_k_th_photon() {
+        let (w, h) = (32, 16);
+        let spreads: Vec<Spread> = (0..w * h)
+            .map(|i| {
+                let (fixed2, measured) = if i % w >= w / 2 { (10.0, false) } else { (0.0, true) };
+                Spread {
+                    bias2: 100.0,
+                    var: 1.0,
+                    camera: 0.0,
+                    room: WIDEST2,
+                    measured,
+                    fixed2,
+                    fixed_var: 0.0,
+                }
+            })
+            .collect();
+        let passes = |photons: f64| Model::new(0.7, Passes { n: 16.0, photons, gather: 0.05 });
+        let widened = widenings(&spreads, w, &passes(4.0));
+        assert_eq!(widened.u[8 * w + 2], 1.0, "measured, large bias: the pilot's radius");
+        assert_eq!(widened.u[8 * w + w - 2], 0.25, "not measured: a pass's own k-th nearest photon");
+        let one = widenings(&spreads, w, &passes(1.0));
+        assert!(one.u.iter().all(|&u| u == 1.0), "{:?}", one.u);
+        // The squared bias of the pixels not measured: 1/m of it at m times the photons.
+        let flat: Vec<Spread> = spreads.iter().map(|s| Spread { fixed2: 0.0, ..*s }).collect();
+        let bias = |photons: f64| {
+            widenings(&spreads, w, &passes(photons)).mse - widenings(&flat, w, &passes(photons)).mse
+        };
+        assert!((bias(1.0) / bias(4.0) - 4.0).abs() < 1e-6, "{} {}", bias(1.0), bias(4.0));
     }
 
     /// Pixels pool their window: a flat region widens, a biased one does not, unmeasured
@@ -415,11 +577,18 @@ mod tests {
                 let noise = if (x + y) % 2 == 0 { 0.05 } else { -0.05 };
                 let bias2 = if biased { 1.0 + noise } else { noise };
                 let room = if x == 6 && y == 6 { 2.0 } else { WIDEST2 };
-                spreads[y * w + x] =
-                    Spread { bias2, var: 1.0, camera: 0.0, room, measured: !(x == 3 && y == 3) };
+                spreads[y * w + x] = Spread {
+                    bias2,
+                    var: 1.0,
+                    camera: 0.0,
+                    room,
+                    measured: !(x == 3 && y == 3),
+                    fixed2: 0.0,
+                    fixed_var: 0.0,
+                };
             }
         }
-        let u = widenings(&spreads, w, 0.7);
+        let u = widenings(&spreads, w, &Model::new(0.7, Passes::pilot())).u;
         // Widened nearly fully (what it costs the other pixels' passes holds it back a little).
         assert!(u[5 * w + 5] > 0.9 * WIDEST2, "flat region: {}", u[5 * w + 5]);
         assert_eq!(u[5 * w + w - 5], 1.0, "biased region");

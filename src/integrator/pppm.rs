@@ -27,8 +27,8 @@
 //! disc's bias and `2 (L_r − L_{r/√2})` is an estimate of that bias, zero in expectation where
 //! the photon density is uniform.
 
-use super::balance::{self, PassWork};
-use super::bandwidth::{mean_inverse_scale, radius2_scale, summary, widenings, Spread};
+use super::balance::{self, Choose, PassWork};
+use super::bandwidth::{radius2_scale, summary, widenings, Model, Passes, Spread};
 use super::maps::{Analysis, GatherPair};
 use super::passes::{camera_stage, Pass, PassImage, PassRenderer};
 use super::sppm::{
@@ -36,7 +36,7 @@ use super::sppm::{
     FirstPoint, Nearest, Scratch,
 };
 use crate::accel::Accel;
-use crate::config::ProgressiveConfig;
+use crate::config::{PhotonPasses, ProgressiveConfig};
 use crate::film::sums::Bias;
 use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, PixelSamples};
@@ -46,7 +46,7 @@ use crate::material::face_forward;
 use crate::photon::footprint::Footprint;
 use crate::photon::map::PhotonMaps;
 use crate::sampling::derive_seed;
-use crate::stats::{PassSamples, Stats};
+use crate::stats::{PassPlan, Stats};
 use glam::Vec3;
 
 /// Pass-indexed progressive photon mapping over a render's passes.
@@ -62,6 +62,8 @@ pub struct PassIndexed<'f, 'a, A: Accel> {
     /// The camera samples of each pass, once the pilot has chosen them ([`balance`]; `None`:
     /// the render's own).
     spp: Option<u32>,
+    /// The photons of each pass over the render's own, once the pilot has chosen them.
+    photons: u32,
 }
 
 impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
@@ -74,7 +76,7 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         widen: bool,
     ) -> Self {
         let gathers = GatherPair::with_footprint(&cfg.gathers, frame.scene);
-        PassIndexed { frame, cfg, analysis, gathers, pilot: None, widen, spp: None }
+        PassIndexed { frame, cfg, analysis, gathers, pilot: None, widen, spp: None, photons: 1 }
     }
 
     /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
@@ -96,7 +98,7 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
         let camera = &frame.camera;
         let width = camera.width as usize;
         let mut found = vec![Found::default(); width * camera.height as usize];
-        let ((points, summary, chosen), c) = stats.run("pilot", "", |_| {
+        let ((points, summary, plan), c) = stats.run("pilot", "", |_| {
             let (_, mut c) = for_each_pixel(
                 width,
                 &mut found,
@@ -121,8 +123,18 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                         found.point = Some((v.hit, ns, r2));
                         if widen {
                             let spread = Spread::measure(frame, &maps, gathers, &v, ns, r2, rng, c);
-                            found.spread = Spread { camera, ..spread };
-                            found.photon_var = photon_variance(&maps, gathers, &v, ns, r2, nearest, c);
+                            // Every point's photon noise, measured or not (what more photons
+                            // or samples a pass weigh against), and the bias that only more
+                            // photons a pass reduce.
+                            // The `k`-th photon lies on the disc's edge, always in the disc and
+                            // never in its half: counted, it would make even light look biased
+                            // by `2 / k`; the other `k − 1` lie anywhere within it.
+                            let all = !spread.measured;
+                            let footprint = Footprint::whole(r2 * (1.0 - 1e-4));
+                            let (var, fixed_var, fixed2) =
+                                first_disc(&maps, gathers, &v, ns, &footprint, nearest, all, c);
+                            let (var, fixed_var) = if all { (var, 0.0) } else { (spread.var, fixed_var) };
+                            found.spread = Spread { camera, var, fixed2, fixed_var, ..spread };
                         }
                     }
                     Vec3::ZERO
@@ -132,7 +144,7 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
             // Each point's surface probed about its widened radius (a seed of its own: the
             // pixels' first seed drew their visible points), and the rays a pass will cast to
             // probe its footprints: as many as the pilot's where its disc was not whole.
-            let probed = |widening: &[f32], c: &mut Counters| {
+            let probed = |widening: &[f32], photons: u32, c: &mut Counters| {
                 let mut states: Vec<(FirstPoint, u64)> = vec![(FirstPoint::default(), 0); found.len()];
                 let seed = derive_seed(pass.seed, 0x911070, 1);
                 let (_, probing) =
@@ -140,7 +152,8 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                         let i = y as usize * width + x as usize;
                         if let Some((hit, ns, r2)) = &found[i].point {
                             let before = c.rays.gather;
-                            state.0 = FirstPoint::probed(frame, hit, *ns, *r2, widening[i], rng, c);
+                            state.0 =
+                                FirstPoint::probed(frame, hit, *ns, *r2, widening[i], photons as f32, rng, c);
                             state.1 = c.rays.gather - before;
                         }
                         Vec3::ZERO
@@ -149,46 +162,54 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 let rays = states.iter().filter(|s| !s.0.whole()).map(|s| s.1).sum::<u64>();
                 (states.into_iter().map(|s| s.0).collect::<Vec<_>>(), rays)
             };
-            let mut widening =
-                if widen { widenings(&spreads, width, cfg.alpha) } else { vec![1.0; spreads.len()] };
-            let (mut points, mut probe_rays) = probed(&widening, &mut c);
-            let mut chosen = None;
-            if widen && cfg.auto_samples {
-                let mut work = PassWork {
-                    photon_rays,
-                    stored: maps.indirect.iter().chain(&maps.caustic).map(|m| m.len() as u64).sum(),
-                    points: found.iter().filter(|f| f.point.is_some()).count() as u64,
-                    probe_rays,
-                    sample_rays: found.iter().map(|f| f.sample_rays).sum::<u64>() as f64 / spp as f64,
-                };
-                let first = choose_samples(&found, &points, spp, cfg.alpha, &work);
-                if first.spp != spp {
-                    // The widening weighs the camera samples' noise: again, for the samples
-                    // chosen (more samples, less of it, so wider gathers pay).
-                    let scale = spp as f64 / first.spp as f64;
-                    let spreads: Vec<Spread> =
-                        spreads.iter().map(|s| Spread { camera: s.camera * scale, ..*s }).collect();
-                    widening = widenings(&spreads, width, cfg.alpha);
-                    (points, probe_rays) = probed(&widening, &mut c);
-                    work.probe_rays = probe_rays;
-                }
-                chosen = Some(choose_samples(&found, &points, spp, cfg.alpha, &work));
+            if !widen {
+                let (points, _) = probed(&vec![1.0; spreads.len()], 1, &mut c);
+                return ((points, None, None), c);
             }
-            ((points, widen.then(|| summary(&widening, &spreads)), chosen), c)
+            // The widenings of passes like the pilot's, for the probes' count; then the plan,
+            // and the probes again where it changed them.
+            let first = widenings(&spreads, width, &Model::new(cfg.alpha, Passes::pilot())).u;
+            let (mut points, probe_rays) = probed(&first, 1, &mut c);
+            let points_seen = found.iter().filter(|f| f.point.is_some()).count() as u64;
+            let work = PassWork {
+                photon_rays,
+                stored: maps.indirect.iter().chain(&maps.caustic).map(|m| m.len() as u64).sum(),
+                points: points_seen,
+                gathered: points_seen * gathers.indirect.k as u64,
+                probe_rays,
+                sample_rays: found.iter().map(|f| f.sample_rays).sum::<u64>() as f64 / spp as f64,
+            };
+            let choose = Choose { samples: cfg.auto_samples, photons: cfg.auto_photons };
+            let plan = balance::plan(&spreads, width, cfg.alpha, &work, spp, choose);
+            if plan.widening != first || plan.photons != 1 {
+                (points, _) = probed(&plan.widening, plan.photons, &mut c);
+            }
+            let summary = summary(&plan.widening, &spreads, plan.photons as f64);
+            ((points, Some(summary), Some((plan, choose))), c)
         });
+        let chosen =
+            plan.as_ref().filter(|(_, choose)| choose.samples || choose.photons).map(|(plan, _)| PassPlan {
+                spp: plan.spp,
+                photons: cfg.maps.photons * plan.photons as u64,
+                caustic_photons: cfg.maps.caustic_photons * plan.photons as u64,
+                camera_share: plan.camera_share,
+                fixed_in_samples: plan.fixed_in_samples,
+            });
         if let Some(stage) = stats.stages.last_mut() {
             let how = match summary {
                 Some(w) => format!(
-                    "widened {:.2}x on average where the light is flat ({:.0} % of the {} pixels measured fully, 2x)",
+                    "widened {:.2}x on average where the light is flat ({:.0} % of the {} pixels measured fully)",
                     w.mean,
                     100.0 * w.widest,
                     w.pixels
                 ),
                 None => "not widened (a short render: fewer than 16 passes, or under 10 s)".to_string(),
             };
-            let samples = match chosen {
+            let planned = match chosen {
                 Some(p) => format!(
-                    "; {} camera samples a pass (their noise {:.0} % of a pass's, the photon term's work {:.1} samples' worth)",
+                    "; passes of {} photons ({} caustic) and {} camera samples (their noise {:.0} % of a pass's, the photon term's work {:.1} samples' worth)",
+                    p.photons,
+                    p.caustic_photons,
                     p.spp,
                     100.0 * p.camera_share,
                     p.fixed_in_samples
@@ -196,45 +217,27 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                 None => String::new(),
             };
             stage.reason = format!(
-                "each pixel's first radius, from a pass of its own seed: the k-th nearest photon's, {how}{samples}"
+                "each pixel's first radius, from a pass of its own seed: the k-th nearest photon's, {how}{planned}"
             );
         }
         stats.widening = summary;
-        stats.pass_samples = chosen;
-        Pilot { points, spp: chosen.map(|p| p.spp), counters: c }
+        stats.pass_plan = chosen;
+        let (spp, photons) = match plan {
+            Some((plan, choose)) => (choose.samples.then_some(plan.spp), plan.photons),
+            None => (None, 1),
+        };
+        Pilot { points, spp, photons, counters: c }
     }
 }
 
 /// What the pilot gives every pass: each pixel's first point, the camera samples of a pass
-/// (`None`: the render's own), and the pilot's counters.
+/// (`None`: the render's own), the photons of a pass over the render's own, and the pilot's
+/// counters.
 struct Pilot {
     points: Vec<FirstPoint>,
     spp: Option<u32>,
+    photons: u32,
     counters: Counters,
-}
-
-/// The camera samples a pass takes ([`balance`]) for what the pilot found at each pixel, its
-/// first points (their widening) and the work of a pass, the pilot's camera samples `spp` a
-/// pixel.
-fn choose_samples(
-    found: &[Found],
-    points: &[FirstPoint],
-    spp: u32,
-    alpha: f32,
-    work: &PassWork,
-) -> PassSamples {
-    // The image's mean variances: of one camera sample, and of one pass's photon term over
-    // the passes' radii, widened as chosen.
-    let n = found.len().max(1) as f64;
-    let rho = mean_inverse_scale(alpha);
-    let camera = found.iter().map(|f| f.spread.camera * spp as f64).sum::<f64>() / n;
-    let widening = points.iter().map(FirstPoint::widening);
-    let photons = found.iter().zip(widening).map(|(f, u)| f.photon_var * rho / u as f64).sum::<f64>() / n;
-    let s = balance::samples(camera, photons, work);
-    let (fixed, per_sample) = work.prices();
-    let per_pass = camera / s as f64 + photons;
-    let camera_share = if per_pass > 0.0 { camera / s as f64 / per_pass } else { 0.0 };
-    PassSamples { spp: s, camera_share, fixed_in_samples: fixed / per_sample }
 }
 
 /// The mirror and shadow rays counted so far.
@@ -242,30 +245,60 @@ fn traced_rays(c: &Counters) -> u64 {
     c.rays.specular + c.rays.shadow
 }
 
-/// The variance of a pass's photon term at the visible point `v` (unit normal `ns` on the
-/// viewer's side) over the whole disc of squared radius `r2`, from the photons `nearest` holds
-/// there: `Σ (β Φ)² / (π r²)²`, summed over the channels.
-fn photon_variance(
+/// What the photons within the first radius say of a pass's photon term at the visible point
+/// `v` (unit normal `ns` on the viewer's side), from the photons `nearest` holds, over the
+/// `footprint` of the first radius's disc: its variance, `Σ (β Φ)² / A²`, that of its part
+/// whose radius is not widened (the caustic maps; with `all`, the indirect ones too), and an
+/// unbiased estimate of that part's squared bias, `b̂² − var(b̂)` for the
+/// passes' own bias probe `b̂ = 2 (L_A − L_{A/2})` over the footprint and its half (each
+/// photon weighs `2 (1 / A − 1 / A_h)` within the half, `2 / A` outside it). Both summed over
+/// the channels.
+#[allow(clippy::too_many_arguments)]
+fn first_disc(
     maps: &PhotonMaps,
     gathers: &GatherPair,
     v: &Landing,
     ns: Vec3,
-    r2: f32,
+    footprint: &Footprint,
     nearest: &Nearest,
+    all: bool,
     c: &mut Counters,
-) -> f64 {
-    let whole = Footprint::whole(r2);
-    let mut sq = Vec3::ZERO;
-    for_each_flux(maps, gathers, v, ns, [&whole, &whole], Some(nearest), None, c, |flux, _, _| {
-        sq += flux * flux
-    });
-    let area = std::f32::consts::PI * r2;
-    let var = (v.beta * v.beta * sq / (area * area)).element_sum() as f64;
-    if var.is_finite() {
-        var
-    } else {
-        0.0
-    }
+) -> (f64, f64, f64) {
+    let half = footprint.half();
+    let (mut sq, mut fixed, mut inner) = (Vec3::ZERO, (Vec3::ZERO, Vec3::ZERO), (Vec3::ZERO, Vec3::ZERO));
+    for_each_flux(
+        maps,
+        gathers,
+        v,
+        ns,
+        [footprint, footprint],
+        Some(nearest),
+        None,
+        c,
+        |flux, d2, caustic| {
+            let q = flux * flux;
+            sq += q;
+            if all || caustic {
+                fixed.0 += flux;
+                fixed.1 += q;
+                if d2 < half.r2 {
+                    inner.0 += flux;
+                    inner.1 += q;
+                }
+            }
+        },
+    );
+    let pi = std::f32::consts::PI;
+    let (area, area_half) = (pi * footprint.r2 * footprint.share, pi * half.r2 * half.share);
+    let beta2 = v.beta * v.beta;
+    let var = (beta2 * sq / (area * area)).element_sum() as f64;
+    let fixed_var = (beta2 * fixed.1 / (area * area)).element_sum() as f64;
+    let bias = 2.0 * v.beta * (fixed.0 / area - inner.0 / area_half);
+    let (w_in, w_out) = (2.0 * (1.0 / area - 1.0 / area_half), 2.0 / area);
+    let var_bias = beta2 * (w_in * w_in * inner.1 + w_out * w_out * (fixed.1 - inner.1));
+    let fixed2 = (bias * bias - var_bias).element_sum() as f64;
+    let finite = |x: f64| if x.is_finite() { x } else { 0.0 };
+    (finite(var), finite(fixed_var), finite(fixed2))
 }
 
 /// What the pilot found at a pixel: its visible point's surface, the normal on the viewer's
@@ -275,8 +308,6 @@ fn photon_variance(
 struct Found {
     point: Option<(SurfaceHit, Vec3, f32)>,
     spread: Spread,
-    /// The variance of the photon term at the first radius ([`photon_variance`]).
-    photon_var: f64,
     /// The camera, mirror and shadow rays of the pilot's camera samples.
     sample_rays: u64,
 }
@@ -294,9 +325,11 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
             let pilot = self.pilot(seed, spp, stats, progress);
             self.pilot = Some(pilot.points);
             self.spp = pilot.spp;
+            self.photons = pilot.photons;
             pilot_counters = pilot.counters;
         }
         let pilot = self.pilot.as_deref().unwrap_or_default();
+        let photons = self.photons as f32;
         // The pilot's camera samples a pass, the pass's own run of each pixel's sequence.
         let pass = &match self.spp {
             Some(spp) => Pass {
@@ -305,8 +338,16 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
             },
             None => *pass,
         };
-        let maps = pass_maps(self.frame, self.cfg, self.analysis, pass, stats, progress);
-        let (frame, cfg, gathers) = (self.frame, self.cfg, &self.gathers);
+        // The pilot's photons a pass.
+        let m = self.photons as u64;
+        let maps = PhotonPasses {
+            photons: self.cfg.maps.photons * m,
+            caustic_photons: self.cfg.maps.caustic_photons * m,
+            ..self.cfg.maps
+        };
+        let cfg = &ProgressiveConfig { maps, ..*self.cfg };
+        let maps = pass_maps(self.frame, cfg, self.analysis, pass, stats, progress);
+        let (frame, gathers) = (self.frame, &self.gathers);
         let scale = radius2_scale(pass.index, cfg.alpha);
         let camera = &frame.camera;
         // Each pixel's bias probe.
@@ -329,11 +370,18 @@ impl<A: Accel> PassRenderer for PassIndexed<'_, '_, A> {
                     let nearest = &mut scratch.nearest;
                     let point = &pilot[y as usize * width + x as usize];
                     let own = point.radius2_at(v.hit.p, ns);
-                    // Where the pilot cannot say, the pass's own k-th nearest photon does, and
-                    // the photons that search found are the gather's.
+                    // Where the pilot cannot say (the pixel's visible point fell outside the
+                    // pilot's radius: a far surface whose pixel is wider than its discs, or
+                    // across an edge), the pass's own k-th nearest photon does: as wide as the
+                    // pilot's where the pass traces more photons and the pilot kept its radius,
+                    // but no wider (the pilot found the light flat about its own point only);
+                    // the caustics keep theirs, and where it is not widened, the photons that
+                    // search found are the gather's.
+                    let grow = if point.r2 > 0.0 { (1.0 / point.narrow).min(photons) } else { 1.0 };
                     let (r2, found, narrow) = match own {
                         Some(r2) => (r2, None, point.narrow),
                         None => match first_radius2(&maps, gathers, (x, y), v.hit.p, ns, nearest, c) {
+                            Some(r2) if grow > 1.0 => (r2 * grow, None, 1.0 / grow),
                             Some(r2) => (r2, Some(&*nearest), 1.0),
                             None => return l,
                         },

@@ -335,7 +335,8 @@ pub(super) struct FirstPoint {
     /// (`CLEAR² r2`; 0 where they found a wall or an edge).
     clear2: f32,
     /// The caustic maps' squared radius over `r2` (below 1 where `r2` was widened for smooth
-    /// light, [`super::bandwidth`]).
+    /// light, [`super::bandwidth`], or the passes trace more photons than the pilot,
+    /// [`super::balance`]).
     pub(super) narrow: f32,
 }
 
@@ -359,12 +360,13 @@ impl FirstPoint {
     ) -> Option<FirstPoint> {
         let n = face_forward(v.hit.n, v.wo);
         let r2 = first_radius2(maps, gathers, pixel, v.hit.p, n, nearest, c)?;
-        Some(FirstPoint::probed(frame, &v.hit, n, r2, 1.0, rng, c))
+        Some(FirstPoint::probed(frame, &v.hit, n, r2, 1.0, 1.0, rng, c))
     }
 
     /// The first point at `hit` (unit normal `n` on the viewer's side) with the squared first
-    /// radius `r2` widened `widening` times (the caustic maps keep `r2`), its surface probed
-    /// `CLEAR` times as wide.
+    /// radius `r2` widened `widening` times, for passes of `photons` times the photons `r2` was
+    /// found in (the caustic maps keep their own `k`-th nearest photon's, `r2 / photons`), its
+    /// surface probed `CLEAR` times as wide.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn probed<A: Accel>(
         frame: &Frame<'_, A>,
@@ -372,13 +374,14 @@ impl FirstPoint {
         n: Vec3,
         r2: f32,
         widening: f32,
+        photons: f32,
         rng: &mut Pcg32,
         c: &mut Counters,
     ) -> FirstPoint {
         let r2 = r2 * widening;
         let wide = CLEAR * CLEAR * r2;
         let clear2 = if probe::clear(frame, hit, n, wide, rng, c) { wide } else { 0.0 };
-        FirstPoint { p: hit.p, n, r2, clear2, narrow: 1.0 / widening }
+        FirstPoint { p: hit.p, n, r2, clear2, narrow: (1.0 / (widening * photons)).min(1.0) }
     }
 
     /// The first radius for a visible point at `p` with normal `n` (on the viewer's side): this
@@ -414,16 +417,6 @@ impl FirstPoint {
     /// need none).
     pub(super) fn whole(&self) -> bool {
         self.clear2 > 0.0
-    }
-
-    /// How many times its squared radius was widened (1 where it was not, or where there is
-    /// no point).
-    pub(super) fn widening(&self) -> f32 {
-        if self.narrow > 0.0 {
-            1.0 / self.narrow
-        } else {
-            1.0
-        }
     }
 
     /// Whether the disc of squared radius `r2` about `p` lies within the disc found whole.
