@@ -1,5 +1,5 @@
 //! How many photons and camera samples a pass of pass-indexed progressive photon mapping
-//! takes, and each pixel's radius with them: the pilot's plan ([`plan`]).
+//! takes, and each pixel's radius with them: the pilot's plan (`plan`).
 //!
 //! A pass pays a fixed price for its photon term (tracing the photons, building their tree,
 //! one visible point per pixel, its gather and the probes of its footprint) and a price per
@@ -19,14 +19,15 @@
 //! samples a pass brought the error of a 20 s render down 12–14 % on the scanned bunny and the
 //! far-away box (`photonmap render S.toml --integrator pppm --time 20 --spp 16`).
 //!
-//! The photons of a pass, `m` times the pilot's (`m` in [`PHOTONS`]), change three things: a
+//! The photons of a pass, `m` times the pilot's (`m` in `PHOTONS`), change three things: a
 //! disc of the same radius holds `m` times the photons (`V / m`), so the pass's other work
 //! (samples, visible points, probes) is spread over more of them; the radii that stay a pass's
 //! own `k`-th nearest photon's (the caustics everywhere, and every map where the pilot could not
 //! measure the light about a pixel: near walls and edges) shrink `m` times in area, and their
 //! bias with them; and fewer, longer passes fit in the time, so the radii shrink less over the
-//! render. The caustics' variance does not fall: their discs hold `k` photons whatever `m`
-//! (counted, it kept the caustics scene at 1; uncounted, it took 4 and its error rose 10 %).
+//! render. The caustics' variance does not fall with them: their discs hold `k` photons
+//! whatever `m` (counted, it kept the caustics scene at 1; uncounted, it took 4 and its error
+//! rose 10 %).
 //! For each `m` the plan balances the samples against the photons' noise and widens the radii
 //! for the bias against the noise ([`super::bandwidth`]), and keeps the `m` whose image the
 //! model predicts best in a reference time (64 of the pilot's passes). The bias that only more
