@@ -125,10 +125,10 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
                             let spread = Spread::measure(frame, &maps, gathers, &v, ns, r2, rng, c);
                             // Every point's photon noise, measured or not (what more photons
                             // or samples a pass weigh against), and the bias that only more
-                            // photons a pass reduce.
-                            // The `k`-th photon lies on the disc's edge, always in the disc and
-                            // never in its half: counted, it would make even light look biased
-                            // by `2 / k`; the other `k − 1` lie anywhere within it.
+                            // photons a pass reduce, over the disc within the `k`-th photon:
+                            // that one lies on the edge, always in the disc and never in its
+                            // half, and counted would make even light look biased by `2 / k`
+                            // (the other `k − 1` lie anywhere within it).
                             let all = !spread.measured;
                             let footprint = Footprint::whole(r2 * (1.0 - 1e-4));
                             let (var, fixed_var, fixed2) =
