@@ -17,8 +17,11 @@
 //! ```
 //!
 //! A pixel's widening lengthens every pixel's passes: given the others', its best `u` is the
-//! least (on a grid over `[1, WIDEST2]`) of `(u σ̄ b)² + V ρ̄ T / (n u) + GATHER_COST Ē u / n`,
-//! `Ē` the image's mean variance per pass; `ROUNDS` rounds of every pixel's choice settle it.
+//! least over `[1, WIDEST2]` (the root of its convex slope, by Newton's method) of
+//! `(u σ̄ b)² + V ρ̄ T / (n u) + GATHER_COST Ē u / n`, `Ē` the image's mean variance per pass;
+//! `ROUNDS` rounds of every pixel's choice settle it. For passes of `m` times the pilot's
+//! photons ([`super::balance`]) `V` is `V / m`, the gathers' price is counted from the pass's
+//! work, and pixels not measured keep a pass's own `k`-th nearest photon (`u = 1 / m`).
 //! (Alone, with no cost, `u³ = V ρ̄ / (2 n σ̄² b²)`.) `n` is fixed: `ρ̄ / (n σ̄²)` goes as
 //! `n^(2 - 3α)`, so `u` moves as `n^(-0.03)` at α = 0.7, and it must not depend on how many
 //! passes a render happens to make, or the parts of a split render would not agree.

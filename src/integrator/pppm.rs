@@ -81,9 +81,10 @@ impl<'f, 'a, A: Accel> PassIndexed<'f, 'a, A> {
 
     /// The pilot: a pass of its own seed (the photon maps every pass traces, and pass 0's visible
     /// points) whose `k`-th nearest photon gives each pixel its first radius `r_1`, widened where
-    /// the light about the pixel is flat ([`bandwidth`]), and, where `--spp` was not given, the
-    /// camera samples of each pass ([`balance`]). It depends on the render's seed only, so every
-    /// pass, on whatever machine, scales the same radius and takes the same samples; a pass's
+    /// the light about the pixel is flat ([`bandwidth`]), and, where `--spp` or `--photons` was
+    /// not given, the camera samples and the photons of each pass ([`balance`]). It depends on
+    /// the render's seed only, so every pass, on whatever machine, scales the same radius and
+    /// takes the same samples and photons; a pass's
     /// own photons then only need the fixed-radius query, and nothing in its estimate depends on
     /// where they happen to lie (Knaus and Zwicker's radius is independent of the pass's photons
     /// too).
