@@ -55,6 +55,13 @@ impl RayCounts {
     }
 }
 
+/// Whether the stage `name` casts rays: the photon stages (guide, maps, sites, portals), the
+/// openings' search, pass-indexed progressive photon mapping's pilot and the camera stage; not
+/// loading, building trees or the accelerator, or the irradiance stage.
+pub fn casts_rays(name: &str) -> bool {
+    name == "camera" || name == "pilot" || name.starts_with("photons.") || name.starts_with("portals.")
+}
+
 /// The report written by `--stats`.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Stats {
@@ -91,11 +98,15 @@ pub struct Stats {
     pub warnings: Vec<String>,
     /// The raw rates weighted by the render's mix of rays (rays/s), 0 when not measured.
     pub raw_rays_per_second: f64,
-    /// `rays_per_second / raw_rays_per_second`: the share of the photon and camera stages'
-    /// time that is ray casting (1 would mean nothing else costs anything; the precomputed
-    /// irradiance's estimation, which casts no ray, is left out of that time wherever it runs);
-    /// 0 when not measured.
+    /// `rays_per_second / raw_rays_per_second`: the share of the time of the stages that cast
+    /// rays ([`casts_rays`]) that is ray casting (1 would mean nothing else costs anything; the
+    /// precomputed irradiance's estimation is left out of that time wherever it runs, and its
+    /// probe rays out of the count); 0 when not measured.
     pub rays_to_raw_ratio: f64,
+    /// The rays `rays_per_second` counts: those of the stages [`casts_rays`] names, but for the
+    /// precomputed irradiance's probes (their time is the estimate's, left out).
+    #[serde(skip)]
+    pub traced_rays: RayCounts,
     /// Where the camera stage's time went.
     pub camera_time: CameraTime,
     /// How much pass-indexed progressive photon mapping widened its first radii (its pilot's
@@ -263,12 +274,17 @@ impl Stats {
     /// Records the raw ray rates and the render's ratio to them.
     pub fn set_raw_rays(&mut self, raw: RawRays) {
         self.raw_rays = Some(raw);
-        self.raw_rays_per_second = raw.mixed_rate(&self.rays);
+        self.raw_rays_per_second = raw.mixed_rate(&self.traced_rays);
         self.rays_to_raw_ratio = if self.raw_rays_per_second > 0.0 {
             self.rays_per_second / self.raw_rays_per_second
         } else {
             0.0
         };
+    }
+
+    /// Seconds spent in the stages that cast rays ([`casts_rays`]).
+    pub fn tracing_seconds(&self) -> f64 {
+        self.stages.iter().filter(|s| casts_rays(&s.name)).map(|s| s.seconds).sum()
     }
 
     /// Seconds spent in the stage `name` (0 if it did not run).

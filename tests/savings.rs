@@ -192,6 +192,19 @@ fn raw_ray_rates_are_measured_when_asked() {
     assert!(ratio > 0.0 && ratio.is_finite(), "{ratio}");
     assert!((ratio - out.stats.rays_per_second / mixed).abs() < 1e-9 * ratio.max(1.0));
     assert_eq!(out.film.pixels, plain.film.pixels);
+    // The rate counts the rays of the stages that cast them (photon stages of every kind, the
+    // sites' paths included, and the camera stage) over those stages' time, but for the
+    // estimate of the precomputed irradiance: its time is left out, and so are its probe rays.
+    let st = &out.stats;
+    let (all, traced) = (st.rays, st.traced_rays);
+    assert!(traced.gather < all.gather, "the sites' probes are counted: {all:?} {traced:?}");
+    assert_eq!(all.total() - traced.total(), all.gather - traced.gather);
+    let seconds: f64 =
+        st.stages.iter().filter(|s| photonmap::stats::casts_rays(&s.name)).map(|s| s.seconds).sum();
+    assert!(st.seconds("photons.indirect_sites") > 0.0 && st.seconds("photons.guide") > 0.0);
+    let traced_seconds = seconds - st.seconds("camera") * st.camera_time.estimate_share;
+    let rate = traced.total() as f64 / traced_seconds;
+    assert!((st.rays_per_second - rate).abs() < 1e-9 * rate, "{} vs {rate}", st.rays_per_second);
 }
 
 /// `photonmap bench --json` and `photonmap render --stats` from the real binary: one row per

@@ -93,6 +93,8 @@ pub struct Clock {
     /// Of `pixels_ns`, the time estimating precomputed irradiance as lookups first read it
     /// (measured, not sampled: set by the integrator after its camera pass).
     pub estimate_ns: u64,
+    /// The rays that estimate cast (its probes), counted with the camera stage's.
+    pub estimate_rays: u64,
 }
 
 impl std::ops::AddAssign for Clock {
@@ -101,6 +103,7 @@ impl std::ops::AddAssign for Clock {
         self.rays_ns += o.rays_ns;
         self.gathers_ns += o.gathers_ns;
         self.estimate_ns += o.estimate_ns;
+        self.estimate_rays += o.estimate_rays;
     }
 }
 

@@ -104,10 +104,12 @@ fn finish_stats(stats: &mut Stats, counters: &Counters, cfg: &RenderConfig) {
     stats.width = cfg.width;
     stats.height = cfg.height;
     // The camera stage's time estimating precomputed irradiance is the irradiance stage's work,
-    // done where it is needed: it casts no ray, and is left out as that stage is.
-    let traced_seconds: f64 = camera_seconds * (1.0 - stats.camera_time.estimate_share) + photon_seconds;
+    // done where it is needed: it is left out as that stage is, and so are its probe rays.
+    let traced_seconds = stats.tracing_seconds() - camera_seconds * stats.camera_time.estimate_share;
+    stats.traced_rays = stats.rays;
+    stats.traced_rays.gather -= clock.estimate_rays.min(stats.traced_rays.gather);
     if traced_seconds > 0.0 {
-        stats.rays_per_second = stats.rays.total() as f64 / traced_seconds;
+        stats.rays_per_second = stats.traced_rays.total() as f64 / traced_seconds;
     }
 }
 
