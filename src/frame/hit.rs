@@ -91,8 +91,7 @@ impl SurfaceHit {
     /// triangle, which every backend treats as a miss).
     #[inline]
     pub fn new(scene: &Scene, hit: Hit) -> Option<SurfaceHit> {
-        let n = scene.mesh.normal(hit.prim)?;
-        let (p, err) = scene.mesh.point_and_error(hit.prim, hit.u, hit.v);
+        let (n, p, err) = scene.mesh.surface_point(hit.prim, hit.u, hit.v)?;
         let mut at = SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, lifted: p, prim: hit.prim, t: hit.t };
         let a = &scene.attributes;
         if a.has_normals() || a.has_uvs() {

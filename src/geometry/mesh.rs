@@ -22,6 +22,15 @@ pub enum MeshError {
     TooManyTriangles(usize),
 }
 
+/// The unit normal `(v1 - v0) x (v2 - v0)` normalised, or `None` for a degenerate triangle
+/// (zero or non-finite area).
+#[inline(always)]
+fn unit_normal([a, b, c]: [Vec3; 3]) -> Option<Vec3> {
+    let n = (b - a).cross(c - a);
+    let len = n.length();
+    (len > 0.0 && len.is_finite()).then(|| n / len)
+}
+
 impl TriangleMesh {
     /// Checks that every coordinate is finite and every index is in range.
     pub fn validate(&self) -> Result<(), MeshError> {
@@ -65,9 +74,17 @@ impl TriangleMesh {
     /// Unit geometric normal, or `None` for a degenerate triangle (zero or non-finite area).
     #[inline]
     pub fn normal(&self, i: u32) -> Option<Vec3> {
-        let n = self.normal_unnormalized(i);
-        let len = n.length();
-        (len > 0.0 && len.is_finite()).then(|| n / len)
+        unit_normal(self.triangle(i))
+    }
+
+    /// [`TriangleMesh::normal`] and [`TriangleMesh::point_and_error`] of one hit, from one
+    /// fetch of the corners (the same floats).
+    #[inline(always)]
+    pub fn surface_point(&self, i: u32, u: f32, v: f32) -> Option<(Vec3, Vec3, Vec3)> {
+        let t = self.triangle(i);
+        let n = unit_normal(t)?;
+        let b = [1.0 - u - v, u, v];
+        Some((n, b[0] * t[0] + b[1] * t[1] + b[2] * t[2], super::barycentric_error(t, b)))
     }
 
     pub fn area(&self, i: u32) -> f32 {
