@@ -248,24 +248,7 @@ impl PhotonMap {
         params: &GatherParams,
         scratch: &mut Vec<Neighbor>,
     ) -> Vec3 {
-        let ns = face_forward(normals.geometric, wo);
-        if let Some(kd) = m.lambertian() {
-            // Constant BRDF: the estimate is irradiance times kd / pi.
-            return self.irradiance(x, ns, params, scratch) * kd * std::f32::consts::FRAC_1_PI;
-        }
-        let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
-        let inv_r2 = 1.0 / r2;
-        let mut sum = Vec3::ZERO;
-        for nb in estimated(scratch, params) {
-            let p = self.tree.get(nb.index);
-            let wi = pack::decode_dir_oct(p.dir);
-            if wi.dot(ns) > 0.0 {
-                sum += kernel_weight(params.kernel, nb.dist2 * inv_r2)
-                    * normals.gather_eval(m, wo, wi)
-                    * self.packed_power(p);
-            }
-        }
-        sum * self.scale / (PI * r2)
+        self.radiance_over(x, normals, wo, m, params, scratch, &mut whole_disc)
     }
 
     /// Irradiance at `x` on the side of `ns` (unit): `sum_p w_p power_p / (pi r^2)`, for
@@ -300,21 +283,7 @@ impl PhotonMap {
         guess: &mut f32,
         scratch: &mut Vec<Neighbor>,
     ) -> [Vec3; 2] {
-        let found = self.gather_guessed(x, ns, params, *guess, scratch);
-        *guess = found.map_or(0.0, |r2| r2 * GUESS_MARGIN);
-        let Some(r2) = found else { return [Vec3::ZERO; 2] };
-        let inv_r2 = 1.0 / r2;
-        let (mut front, mut back) = (Vec3::ZERO, Vec3::ZERO);
-        for nb in estimated(scratch, params) {
-            let p = self.tree.get(nb.index);
-            let side = pack::decode_dir_oct_unnormalized(p.dir).dot(ns);
-            if side > 0.0 {
-                front += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
-            } else if side < 0.0 {
-                back += kernel_weight(params.kernel, nb.dist2 * inv_r2) * self.packed_power(p);
-            }
-        }
-        [front * self.scale / (PI * r2), back * self.scale / (PI * r2)]
+        self.sides_over(x, ns, params, guess, scratch, true, &mut whole_disc)
     }
 
     /// [`PhotonMap::radiance`] over footprints: the photons count only over
@@ -340,7 +309,7 @@ impl PhotonMap {
             return e * kd * std::f32::consts::FRAC_1_PI;
         }
         let Some(r2) = self.gather(x, ns, params, scratch) else { return Vec3::ZERO };
-        let mut footprint: Option<Footprint> = None;
+        let mut footprint: Option<Over> = None;
         let mut sum = Vec3::ZERO;
         for nb in estimated(scratch, params) {
             let p = self.tree.get(nb.index);
@@ -348,14 +317,12 @@ impl PhotonMap {
             if wi.dot(ns) <= 0.0 {
                 continue;
             }
-            let fp = footprint.get_or_insert_with(|| probe(false, r2));
-            if nb.dist2 < fp.r2 && fp.contains(p.position() - x) {
-                sum += kernel_weight(params.kernel, nb.dist2 / fp.r2)
-                    * normals.gather_eval(m, wo, wi)
-                    * self.packed_power(p);
+            let over = footprint.get_or_insert_with(|| Over::new(probe(false, r2), r2));
+            if let Some(w) = over.weight(nb, p.position() - x, params.kernel) {
+                sum += w * normals.gather_eval(m, wo, wi) * self.packed_power(p);
             }
         }
-        footprint.map_or(Vec3::ZERO, |fp| sum * self.scale / (PI * fp.r2 * fp.kernel_share(params.kernel)))
+        footprint.map_or(Vec3::ZERO, |over| sum * self.scale / over.area(params.kernel))
     }
 
     /// [`PhotonMap::irradiance_sides_near`] over footprints: each side's photons count only over
@@ -389,7 +356,7 @@ impl PhotonMap {
         let found = self.gather_guessed(x, ns, params, *guess, scratch);
         *guess = found.map_or(0.0, |r2| r2 * GUESS_MARGIN);
         let Some(r2) = found else { return [Vec3::ZERO; 2] };
-        let mut footprints: [Option<Footprint>; 2] = [None, None];
+        let mut footprints: [Option<Over>; 2] = [None, None];
         let mut sums = [Vec3::ZERO; 2];
         for nb in estimated(scratch, params) {
             let p = self.tree.get(nb.index);
@@ -399,14 +366,13 @@ impl PhotonMap {
                 _ if side < 0.0 && both => 1,
                 _ => continue,
             };
-            let fp = footprints[s].get_or_insert_with(|| probe(s == 1, r2));
-            if nb.dist2 < fp.r2 && fp.contains(p.position() - x) {
-                sums[s] += kernel_weight(params.kernel, nb.dist2 / fp.r2) * self.packed_power(p);
+            let over = footprints[s].get_or_insert_with(|| Over::new(probe(s == 1, r2), r2));
+            if let Some(w) = over.weight(nb, p.position() - x, params.kernel) {
+                sums[s] += w * self.packed_power(p);
             }
         }
         let estimate = |s: usize| {
-            footprints[s]
-                .map_or(Vec3::ZERO, |fp| sums[s] * self.scale / (PI * fp.r2 * fp.kernel_share(params.kernel)))
+            footprints[s].map_or(Vec3::ZERO, |over| sums[s] * self.scale / over.area(params.kernel))
         };
         [estimate(0), estimate(1)]
     }
@@ -588,6 +554,40 @@ impl PhotonMap {
             wi: pack::decode_dir_oct(p.dir),
             power: self.power(p),
         })
+    }
+}
+
+/// The footprint of the whole disc of squared radius `r2`: the estimates without probes.
+fn whole_disc(_back: bool, r2: f32) -> Footprint {
+    Footprint::whole(r2)
+}
+
+/// A gather's footprint as its sum uses it: which photons count and with what kernel weight.
+#[derive(Clone, Copy)]
+struct Over {
+    fp: Footprint,
+    /// Whether the footprint's disc is the gather's own (not one shrunk by the probes).
+    own: bool,
+    inv_r2: f32,
+}
+
+impl Over {
+    fn new(fp: Footprint, r2: f32) -> Self {
+        Over { own: fp.r2 == r2, inv_r2: 1.0 / fp.r2, fp }
+    }
+
+    /// The kernel weight of the photon `nb` at `offset` from the gather point, or `None` when
+    /// it lies outside the footprint (every photon the search found lies in its own disc).
+    #[inline]
+    fn weight(&self, nb: &Neighbor, offset: Vec3, kernel: Kernel) -> Option<f32> {
+        ((self.own || nb.dist2 < self.fp.r2) && self.fp.contains(offset))
+            .then(|| kernel_weight(kernel, nb.dist2 * self.inv_r2))
+    }
+
+    /// The area the photons counted are spread over, their kernel's weight over it included.
+    #[inline]
+    fn area(&self, kernel: Kernel) -> f32 {
+        PI * self.fp.r2 * self.fp.kernel_share(kernel)
     }
 }
 
