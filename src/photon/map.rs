@@ -578,7 +578,7 @@ impl Over {
 
     /// The kernel weight of the photon `nb` at `offset` from the gather point, or `None` when
     /// it lies outside the footprint (every photon the search found lies in its own disc).
-    #[inline]
+    #[inline(always)]
     fn weight(&self, nb: &Neighbor, offset: Vec3, kernel: Kernel) -> Option<f32> {
         ((self.own || nb.dist2 < self.fp.r2) && self.fp.contains(offset))
             .then(|| kernel_weight(kernel, nb.dist2 * self.inv_r2))
