@@ -81,6 +81,8 @@ pub struct Stats {
     /// Each photon map's record, and the precomputed irradiance's sites' ([`SITE_RECORDS`]).
     pub photons: BTreeMap<String, MapStats>,
     pub rays: RayCounts,
+    /// [`Stats::traced_rays`] over the time of the stages that cast them ([`casts_rays`]), the
+    /// estimate of the precomputed irradiance left out.
     pub rays_per_second: f64,
     pub photons_traced_per_second: f64,
     pub gather_queries: u64,
