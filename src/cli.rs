@@ -68,29 +68,7 @@ pub enum Command {
     /// how often they disagree.
     Agree(AgreeArgs),
     /// Compare two EXR images: RMSE and relative MSE over all pixels and channels, means.
-    Compare {
-        /// The image to judge.
-        image: PathBuf,
-        /// The reference (or give --exact).
-        #[arg(required_unless_present = "exact")]
-        reference: Option<PathBuf>,
-        /// Judge against this exact radiance everywhere instead of a reference image (the white
-        /// furnace: 2).
-        #[arg(long, value_name = "RADIANCE", conflicts_with_all = ["reference", "downsample"])]
-        exact: Option<f32>,
-        /// Box-downsample the reference by this factor first (when the image is smaller).
-        #[arg(long)]
-        downsample: Option<usize>,
-        /// Print one JSON object.
-        #[arg(long)]
-        json: bool,
-        /// Write the absolute difference, scaled by this factor, as a PNG.
-        #[arg(long, value_name = "PNG")]
-        diff: Option<PathBuf>,
-        /// Scale of the difference image.
-        #[arg(long, default_value_t = 10.0)]
-        diff_scale: f32,
-    },
+    Compare(CompareArgs),
     /// Error against time: render a scene with several methods at several time budgets and
     /// compare each image with a reference (table, CSV, log-log SVG plot).
     Converge(ConvergeArgs),
@@ -328,6 +306,36 @@ pub struct AgreeArgs {
     pub robust: bool,
 }
 
+/// `photonmap compare`.
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// The image to judge.
+    pub image: PathBuf,
+    /// The reference (or give --exact).
+    #[arg(required_unless_present = "exact")]
+    pub reference: Option<PathBuf>,
+    /// Judge against this exact radiance everywhere instead of a reference image (the white
+    /// furnace: 2).
+    #[arg(long, value_name = "RADIANCE", conflicts_with_all = ["reference", "downsample"])]
+    pub exact: Option<f32>,
+    /// Box-downsample the reference by this factor first (when the image is smaller).
+    #[arg(long)]
+    pub downsample: Option<usize>,
+    /// Judge only the pixels x0 <= x < x1, y0 <= y < y1 (of the image, from its top left
+    /// corner): a region of interest, such as an object the bias sits on.
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_region)]
+    pub region: Option<[usize; 4]>,
+    /// Print one JSON object.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the absolute difference, scaled by this factor, as a PNG.
+    #[arg(long, value_name = "PNG")]
+    pub diff: Option<PathBuf>,
+    /// Scale of the difference image.
+    #[arg(long, default_value_t = 10.0)]
+    pub diff_scale: f32,
+}
+
 #[derive(Args, Debug)]
 pub struct ConvergeArgs {
     /// Scene file (TOML).
@@ -424,4 +432,18 @@ pub struct BenchArgs {
     pub json: bool,
     #[command(flatten)]
     pub settings: SettingsArgs,
+}
+
+/// `--region X0,Y0,X1,Y1`: four pixel coordinates, the first corner strictly before the second.
+fn parse_region(text: &str) -> Result<[usize; 4], String> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let numbers: Vec<usize> = parts
+        .iter()
+        .map(|p| p.parse::<usize>().map_err(|_| format!("`{p}` is not a pixel coordinate")))
+        .collect::<Result<_, _>>()?;
+    match numbers[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        [_, _, _, _] => Err(format!("{text}: the region is empty (X0 < X1 and Y0 < Y1 are needed)")),
+        _ => Err(format!("{text}: four numbers X0,Y0,X1,Y1 are needed")),
+    }
 }

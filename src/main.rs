@@ -47,9 +47,7 @@ fn main() -> ExitCode {
         Command::Stress(args) => stress(args),
         Command::Converge(args) => converge(args),
         Command::Bench(args) => bench(*args),
-        Command::Compare { image, reference, exact, downsample, json, diff, diff_scale } => {
-            compare(&image, reference.as_deref(), exact, downsample, json, diff.as_deref(), diff_scale)
-        }
+        Command::Compare(args) => compare(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -519,16 +517,10 @@ fn agree(args: cli::AgreeArgs) -> Result<()> {
     Ok(())
 }
 
-fn compare(
-    image: &std::path::Path,
-    reference: Option<&std::path::Path>,
-    exact: Option<f32>,
-    downsample: Option<usize>,
-    json: bool,
-    diff: Option<&std::path::Path>,
-    diff_scale: f32,
-) -> Result<()> {
+fn compare(args: &cli::CompareArgs) -> Result<()> {
     use photonmap::film::Film;
+    let cli::CompareArgs { exact, downsample, region, json, diff_scale, .. } = *args;
+    let (image, reference, diff) = (args.image.as_path(), args.reference.as_deref(), args.diff.as_deref());
     let a = Film::read_exr(image)?;
     let mut b = match (reference, exact) {
         (Some(path), _) => Film::read_exr(path)?,
@@ -541,6 +533,22 @@ fn compare(
         }
         b = b.downsample(f);
     }
+    let (a, b) = match region {
+        Some([x0, y0, x1, y1]) => {
+            if x1 > a.width || y1 > a.height || (a.width, a.height) != (b.width, b.height) {
+                bail!(
+                    "--region {x0},{y0},{x1},{y1} does not fit {} ({}x{}) and its reference ({}x{})",
+                    image.display(),
+                    a.width,
+                    a.height,
+                    b.width,
+                    b.height
+                );
+            }
+            (a.crop(x0, y0, x1, y1), b.crop(x0, y0, x1, y1))
+        }
+        None => (a, b),
+    };
     let Some((rmse, rel_mse)) = photonmap::film::compare(&a, &b) else {
         bail!(
             "{} is {}x{} but {} is {}x{}",

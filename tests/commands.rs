@@ -136,6 +136,44 @@ fn compare_says_when_a_file_is_not_openexr() {
     assert!(err.contains("x.png: not an OpenEXR file"), "{err}");
 }
 
+/// `compare --region` judges only the pixels asked for: two images that differ in one pixel
+/// compare equal over a region without it, and a region that is empty, malformed or off the
+/// image is refused with a line naming it.
+#[test]
+fn compare_judges_a_region() {
+    use photonmap::film::Film;
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
+    let mut film = Film::new(4, 4);
+    film.pixels.fill(glam::Vec3::ONE);
+    film.write_exr(&a).unwrap();
+    film.pixels[0] = glam::Vec3::splat(5.0);
+    film.write_exr(&b).unwrap();
+    let compare = |extra: &[&str]| {
+        let mut args = vec!["compare", b.to_str().unwrap(), a.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let whole = compare(&[]);
+    assert!(whole.status.success());
+    assert!(text(&whole.stdout).contains("mean 1.25000 vs 1.00000 (+25.00%)"), "{}", text(&whole.stdout));
+    let region = compare(&["--region", "1,0,4,4"]);
+    assert!(region.status.success(), "{}", text(&region.stderr));
+    assert!(text(&region.stdout).starts_with("rmse 0.00000"), "{}", text(&region.stdout));
+    assert!(text(&region.stdout).contains("mean 1.00000 vs 1.00000"), "{}", text(&region.stdout));
+    let corner = compare(&["--region", "0,0,1,1", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&corner.stdout).unwrap();
+    assert_eq!(v["mean"].as_f64(), Some(5.0), "{v}");
+    for (bad, says) in
+        [("2,0,2,4", "the region is empty"), ("1,2,3", "four numbers"), ("0,0,5,4", "does not fit")]
+    {
+        let out = compare(&["--region", bad]);
+        assert!(!out.status.success(), "{bad}");
+        let err = text(&out.stderr);
+        assert!(err.contains(says) && err.lines().count() == 1, "{bad}: {err}");
+    }
+}
+
 #[test]
 fn a_cause_is_said_once() {
     let dir = tempfile::tempdir().unwrap();

@@ -69,6 +69,21 @@ impl Film {
         out
     }
 
+    /// The pixels `x0 <= x < x1`, `y0 <= y < y1` as a film of their own.
+    ///
+    /// # Panics
+    /// If the rectangle is empty or does not lie within the film.
+    pub fn crop(&self, x0: usize, y0: usize, x1: usize, y1: usize) -> Film {
+        assert!(x0 < x1 && x1 <= self.width && y0 < y1 && y1 <= self.height, "a crop within the film");
+        let mut out = Film::new(x1 - x0, y1 - y0);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                out.pixels[(y - y0) * out.width + (x - x0)] = self.get(x, y);
+            }
+        }
+        out
+    }
+
     /// Writes float32 RGB OpenEXR atomically.
     pub fn write_exr(&self, path: &Path) -> Result<(), ImageError> {
         self.write_exr_with(path, &[])
