@@ -533,21 +533,20 @@ fn compare(args: &cli::CompareArgs) -> Result<()> {
         }
         b = b.downsample(f);
     }
+    // Images of different sizes are refused below, region or not.
     let (a, b) = match region {
-        Some([x0, y0, x1, y1]) => {
-            if x1 > a.width || y1 > a.height || (a.width, a.height) != (b.width, b.height) {
+        Some([x0, y0, x1, y1]) if (a.width, a.height) == (b.width, b.height) => {
+            if x1 > a.width || y1 > a.height {
                 bail!(
-                    "--region {x0},{y0},{x1},{y1} does not fit {} ({}x{}) and its reference ({}x{})",
+                    "--region {x0},{y0},{x1},{y1} does not fit {} ({}x{})",
                     image.display(),
                     a.width,
-                    a.height,
-                    b.width,
-                    b.height
+                    a.height
                 );
             }
             (a.crop(x0, y0, x1, y1), b.crop(x0, y0, x1, y1))
         }
-        None => (a, b),
+        _ => (a, b),
     };
     let Some((rmse, rel_mse)) = photonmap::film::compare(&a, &b) else {
         bail!(

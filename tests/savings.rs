@@ -199,10 +199,8 @@ fn raw_ray_rates_are_measured_when_asked() {
     let (all, traced) = (st.rays, st.traced_rays);
     assert!(traced.gather < all.gather, "the sites' probes are counted: {all:?} {traced:?}");
     assert_eq!(all.total() - traced.total(), all.gather - traced.gather);
-    let seconds: f64 =
-        st.stages.iter().filter(|s| photonmap::stats::casts_rays(&s.name)).map(|s| s.seconds).sum();
     assert!(st.seconds("photons.indirect_sites") > 0.0 && st.seconds("photons.guide") > 0.0);
-    let traced_seconds = seconds - st.seconds("camera") * st.camera_time.estimate_share;
+    let traced_seconds = st.tracing_seconds() - st.seconds("camera") * st.camera_time.estimate_share;
     let rate = traced.total() as f64 / traced_seconds;
     assert!((st.rays_per_second - rate).abs() < 1e-9 * rate, "{} vs {rate}", st.rays_per_second);
 }

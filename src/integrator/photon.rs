@@ -329,8 +329,8 @@ impl<A: Accel> PassRenderer for PhotonMapper<'_, '_, A> {
             )
         });
         let mut c = c;
-        c.rays.gather += site_rays.load(Ordering::Relaxed);
-        c.clock.estimate_rays = site_rays.load(Ordering::Relaxed);
+        c.clock.estimate_rays = site_rays.into_inner();
+        c.rays.gather += c.clock.estimate_rays;
         let after = record_estimated(stats, IRRADIANCE_SITES, &made.irradiance)
             + record_estimated(stats, CAUSTIC_SITES, &made.caustic);
         c.clock.estimate_ns = ((after - before).max(0.0) * 1e9) as u64;
