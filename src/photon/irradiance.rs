@@ -177,8 +177,12 @@ struct Neighbourhood {
     /// arithmetic.
     slack: f32,
     sites: Vec<NearSite>,
-    /// Scratch for the search that gathers them.
+    /// Whether `sites` are the nearest [`NEIGHBOURHOOD_SITES`] to `centre`, more lying
+    /// within the radius asked for.
+    capped: bool,
+    /// Scratch for the search that gathers them, and for their order.
     found: Vec<Neighbor>,
+    keys: Vec<u64>,
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -248,10 +252,17 @@ impl Neighbourhood {
 
     /// Gathers the sites within `radius` of `centre` from `tree` (the nearest
     /// [`NEIGHBOURHOOD_SITES`] if there are more, the radius shrunk to the farthest of them).
+    /// Nothing is searched when the sites held already answer for the same centre: those
+    /// within a radius as large, or the nearest [`NEIGHBOURHOOD_SITES`] (a pixel's queries
+    /// that reach past them are searched for one by one).
     fn gather(&mut self, tree: &KdTree<Site>, centre: Vec3, radius: f32) {
+        if self.radius > 0.0 && centre == self.centre && (self.capped || radius <= self.radius) {
+            return;
+        }
         tree.knn(centre, NEIGHBOURHOOD_SITES, radius, &mut self.found);
         self.centre = centre;
-        self.radius = if self.found.len() == NEIGHBOURHOOD_SITES {
+        self.capped = self.found.len() == NEIGHBOURHOOD_SITES;
+        self.radius = if self.capped {
             // Every site strictly nearer than the farthest one kept is held.
             self.found[0].dist2.sqrt()
         } else {
@@ -260,11 +271,16 @@ impl Neighbourhood {
         let scale = centre.abs().max_element() + self.radius;
         self.slack = self.radius * 1e-5 + 8.0 * f32::EPSILON * scale;
         self.sites.clear();
-        self.found.sort_unstable_by(|a, b| a.dist2.total_cmp(&b.dist2));
-        self.sites.extend(self.found.iter().map(|n| {
-            let s = tree.get(n.index);
-            let from_centre = n.dist2.sqrt();
-            NearSite { pos: s.position(), normal: s.normal(), from_centre, index: n.index }
+        // By distance, as integers: a non-negative float's bits order as its value does (and
+        // ties go by index).
+        self.keys.clear();
+        self.keys.extend(self.found.iter().map(|n| u64::from(n.dist2.to_bits()) << 32 | u64::from(n.index)));
+        self.keys.sort_unstable();
+        self.sites.extend(self.keys.iter().map(|&key| {
+            let index = key as u32;
+            let s = tree.get(index);
+            let from_centre = f32::from_bits((key >> 32) as u32).sqrt();
+            NearSite { pos: s.position(), normal: s.normal(), from_centre, index }
         }));
     }
 }
