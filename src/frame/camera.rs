@@ -101,7 +101,8 @@ impl CameraBatch {
             return None;
         }
         let centre = sum / n as f32;
-        let radius = points().map(|p| (p - centre).length()).fold(0.0, f32::max);
+        // One square root: it is monotonic and correctly rounded, so this is the largest length.
+        let radius = points().map(|p| (p - centre).length_squared()).fold(0.0, f32::max).sqrt();
         Some((centre, radius))
     }
 }
