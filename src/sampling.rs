@@ -290,43 +290,44 @@ pub fn radical_inverse_3(mut i: u64) -> f64 {
         i /= BASE3_CHUNK;
     }
     // The last (most significant) digits, leading zeros left out as the digit loop leaves them.
-    let (rest, n) = BASE3_PART[i as usize];
-    reversed = reversed * 3u64.pow(u32::from(n)) + u64::from(rest);
+    let (rest, n, shift) = BASE3_PART[i as usize];
+    reversed = reversed * u64::from(shift) + u64::from(rest);
     reversed as f64 * BASE3_SCALE[digits + n as usize]
 }
 
 /// Six base-3 digits.
 const BASE3_CHUNK: u64 = 729;
 
+/// The base-3 digits of `i` mirrored, at least `width` of them (leading zeros counted), as the
+/// digit loop of [`radical_inverse`] makes them: the number and how many digits.
+const fn mirror3(mut i: u64, width: u32) -> (u64, u32) {
+    let (mut r, mut n) = (0, 0);
+    while i > 0 || n < width {
+        r = r * 3 + i % 3;
+        i /= 3;
+        n += 1;
+    }
+    (r, n)
+}
+
 /// `v < 729` as six base-3 digits (leading zeros included), mirrored.
 const BASE3_FULL: [u16; 729] = {
     let mut table = [0u16; 729];
     let mut v = 0;
     while v < 729 {
-        let (mut i, mut r, mut k) = (v, 0, 0);
-        while k < 6 {
-            r = r * 3 + i % 3;
-            i /= 3;
-            k += 1;
-        }
-        table[v] = r as u16;
+        table[v] = mirror3(v as u64, 6).0 as u16;
         v += 1;
     }
     table
 };
 
-/// `v < 729` as its significant base-3 digits, mirrored, and how many there are.
-const BASE3_PART: [(u16, u8); 729] = {
-    let mut table = [(0u16, 0u8); 729];
+/// `v < 729` as its significant base-3 digits, mirrored, how many there are and `3^` that.
+const BASE3_PART: [(u16, u8, u16); 729] = {
+    let mut table = [(0u16, 0u8, 1u16); 729];
     let mut v = 0;
     while v < 729 {
-        let (mut i, mut r, mut n) = (v, 0, 0);
-        while i > 0 {
-            r = r * 3 + i % 3;
-            i /= 3;
-            n += 1;
-        }
-        table[v] = (r as u16, n);
+        let (r, n) = mirror3(v as u64, 0);
+        table[v] = (r as u16, n as u8, 3u16.pow(n));
         v += 1;
     }
     table

@@ -64,9 +64,9 @@ unsafe impl Sync for Scene {}
 /// The build quality of every scene and its geometry: high, not Embree's default (medium).
 /// Measured by the instructions inside Embree (`valgrind --tool=callgrind --toggle-collect='rtc*'
 /// photonmap render SCENE --threads 1 --width 64 --height 64`): 2.8 % fewer on the 69 000-
-/// triangle bunny, the same on the caustics box; the
-/// build of a million-triangle sphere (`scripts/make_big_obj.py`) took as long (0.2-0.3 s) and
-/// the process's peak memory the same (376 MB).
+/// triangle bunny, the same on the caustics box; the build of a million-triangle sphere
+/// (`scripts/make_big_obj.py`) took as long (0.2-0.3 s) and the process's peak memory the same
+/// (376 MB).
 const QUALITY: sys::RTCBuildQuality = sys::RTC_BUILD_QUALITY_HIGH;
 
 impl Scene {
