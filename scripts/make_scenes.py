@@ -811,6 +811,33 @@ def faraway():
     emit("faraway", desc, parts, materials, camera, (), notes, digits=9)
 
 
+# ---------------------------------------------------------------------------------------------
+# column
+
+
+def column():
+    # The atrium's fluted column alone in a closed grey room, lit by a point light high on one
+    # side; the camera faces the side that light meets at grazing angles, so that the light
+    # changes from facet to facet across the flutes (concave grooves, convex ridges) at the
+    # scale of a gather disc.
+    room = Part("room", "grey")
+    box(room, (-1.5, 0.0, -1.5), (1.5, 3.0, 1.5))
+    room.tris = [(a, c, b) for (a, b, c) in room.tris]  # facing in
+    shaft = Part("column", "column")
+    fluted_column(shaft, 0.0, 0.0, 0.22, 0.0, 3.0)
+    materials = {"grey": diffuse((0.5, 0.5, 0.5)), "column": diffuse((0.72, 0.62, 0.46))}
+    camera = {"eye": (0.0, 1.5, -1.4), "target": (0.0, 1.5, 0.0), "vfov_deg": 40.0}
+    lights = [{"type": "point", "position": (1.3, 2.8, 0.2), "intensity": (10.0, 10.0, 10.0)}]
+    notes = [
+        "room: the box [-1.5, 1.5] x [0, 3] x [-1.5, 1.5], facing in; column: the atrium's "
+        "(48 sides, 16 flutes, r 0.22 m), floor to ceiling at the origin",
+        "the column's face seen spans pixels x 80..183 of 256 (every row): photonmap compare --region 80,0,183,256",
+    ]
+    desc = ("a fluted column in a closed grey room, a point light high to one side; the camera "
+            "faces the column where the light grazes it: light that changes flute by flute.")
+    emit("column", desc, [room, shaft], materials, camera, lights, notes)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--bunny", type=Path, default=DEFAULT_BUNNY, help="the Stanford bunny OBJ")
@@ -823,6 +850,7 @@ def main():
         "glassknot": glassknot,
         "faraway": faraway,
         "atrium": atrium,
+        "column": column,
     }
     for name in args.names or makers:
         if name not in makers:
