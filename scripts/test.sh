@@ -23,7 +23,7 @@ RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --locked
 # between backends, the stress suite, the command line, bad and fuzzed input, golden images,
 # batches and merges). The rest (progressive means, textures, cutouts, guiding, ...) render
 # through the same code whichever backend casts, and run in the Embree build below: running
-# them twice was some 4 minutes of the suite, which is kept under 15.
+# them twice took some 4 minutes of a suite whose budget is 15.
 step "tests without Embree (pure-Rust BVH only)"
 cargo test --locked --no-default-features --lib
 cargo test --locked --no-default-features --test all -- \
