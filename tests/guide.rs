@@ -239,3 +239,21 @@ fn no_opening_is_looked_for_outdoors_or_where_nothing_leaves() {
     let found = openings::find(&cornell, &Bvh::build(&cornell.mesh), &cornell.camera);
     assert!(found.portals.is_empty() && found.reason.contains("no distant light"), "{}", found.reason);
 }
+
+#[test]
+fn a_pilot_that_stores_nothing_stops_growing() {
+    // A floor under the sun, seen from above: every photon leaves the scene at its first
+    // bounce, so none is stored anywhere. The pilot stops at its middle size (2^20 photons)
+    // instead of growing to 2^23 (a second's work on every such render), and guides nothing.
+    let mut b = Builder::default();
+    let floor = b.material("floor", diffuse(0.5));
+    let v = Vec3::new;
+    b.quad([v(-1.0, 0.0, -1.0), v(1.0, 0.0, -1.0), v(1.0, 0.0, 1.0), v(-1.0, 0.0, 1.0)], Vec3::Y, floor);
+    b.light(LightDesc::Distant { direction: Vec3::new(-0.6, -1.0, 0.0), irradiance: Vec3::splat(3.0) });
+    let scene = b.build("floor", camera(v(0.0, 3.0, 0.0), Vec3::ZERO, Vec3::NEG_Z, 30.0));
+    let out = render_checked(&scene, &settings(true, 1), 8);
+    let stage = out.stats.stages.iter().find(|s| s.name == "photons.guide").unwrap();
+    assert!(stage.reason.starts_with("pilot of 1048576 photons"), "{stage:?}");
+    assert!(stage.reason.contains("none stored anywhere"), "{stage:?}");
+    assert_eq!(out.stats.photons["indirect"].stored, 0);
+}
