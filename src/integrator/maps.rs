@@ -588,17 +588,17 @@ fn count_seen(out: &trace::PassOutput, region: &VisibleRegion) -> Vec<u64> {
     out.maps.iter().map(|m| m.par_iter().filter(|h| region.contains(h.pos)).count() as u64).collect()
 }
 
-/// Photons a pilot emitted, and the seen photons it stored.
 /// Whether a pilot of `size` photons has stored none anywhere, seen or not, and is as large as
 /// [`PILOT_PHOTONS`]`[1]`: every photon left the scene or was absorbed at its first bounce (a
-/// floor under a sky). None in a million means fewer than three a million (at 95 %), so the
-/// last pilot, eight times larger, would store a few dozen at most and see fewer, far short of
-/// [`PILOT_SEEN`] and of anything to learn a guide from; it took a second on every such render
-/// (a lit 8×8 floor: 1.2 s, 1.14 of them the pilot's 2^23 photons; now 0.19 s).
+/// floor under the sun or a sky). None in a million means fewer than three a million (at
+/// 95 %), so the last pilot, eight times larger, would store a few dozen at most and see fewer,
+/// far short of [`PILOT_SEEN`] and of anything to learn a guide from; it took a second on every
+/// such render (a lit 8×8 floor: 1.2 s, 1.14 of them the pilot's 2^23 photons; now 0.19 s).
 fn barren(pilot: &[EmitterPilot], size: u64) -> bool {
     size >= PILOT_PHOTONS[1] && pilot.iter().all(|e| e.stored == 0)
 }
 
+/// Photons a pilot emitted, and the seen photons it stored.
 fn efficiency(pilot: &[EmitterPilot]) -> (u64, u64) {
     pilot.iter().fold((0, 0), |(a, b), e| (a + e.emitted, b + e.seen))
 }
