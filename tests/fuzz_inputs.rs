@@ -865,6 +865,23 @@ fn fuzz_gltf() {
 }
 
 #[test]
+fn a_glb_whose_length_is_shorter_than_its_header_is_an_error() {
+    // Found by `scripts/fuzz.sh gltf`: the header's length field below the header's own 12
+    // bytes made the `gltf` crate's subtraction overflow (a panic where overflow is checked).
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("quad.glb");
+    for length in [0u32, 11] {
+        let mut bytes = glb(GLTF.as_bytes(), GLTF_BIN);
+        bytes[8..12].copy_from_slice(&length.to_le_bytes());
+        fs::write(&path, &bytes).unwrap();
+        let r = outcome(|| Scene::load(&path), &[], &["quad.glb"]);
+        assert!(r.is_ok(), "length {length}: {}", r.unwrap_err());
+        let e = Scene::load(&path).unwrap_err().to_string();
+        assert!(e.contains("length of") && e.contains("quad.glb"), "{e}");
+    }
+}
+
+#[test]
 fn fuzz_glb_bytes() {
     let dir = tempfile::tempdir().unwrap();
     let base = glb(GLTF.as_bytes(), GLTF_BIN);

@@ -166,6 +166,18 @@ pub fn load(path: &Path, textures: &mut Textures) -> Result<GltfData, SceneError
 /// Parses and validates the JSON (of a `.gltf`, or inside a `.glb`).
 fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
     let (json, blob) = if bytes.starts_with(b"glTF") {
+        // The header's length counts the header's own 12 bytes; `Glb::from_slice` takes them
+        // off unchecked (gltf 1.4.1), which overflows on a shorter length (found by
+        // `scripts/fuzz.sh gltf`).
+        if let Some(&[a, b, c, d]) = bytes.get(8..12) {
+            let length = u32::from_le_bytes([a, b, c, d]);
+            if length < 12 {
+                let e = format!(
+                    "malformed GLB: its header gives a length of {length} bytes, less than its own 12"
+                );
+                return Err(SceneError::file(path, e));
+            }
+        }
         let glb = gltf::Glb::from_slice(bytes)
             .map_err(|e| SceneError::file(path, format!("malformed GLB: {e}")))?;
         (glb.json.into_owned(), glb.bin.map(|b| b.into_owned()))
