@@ -326,8 +326,7 @@ impl MapStages<'_> {
             // A second pilot of `first` photons sent where the first found seen photons, which
             // sharpens the guide where the first saw only a few.
             let Some(coarse) = EmissionGuide::learn(&pilot, &kinds) else {
-                let stored = pilot.iter().map(|e| e.stored).sum::<u64>();
-                let none = if stored == 0 { " (none stored anywhere)" } else { "" };
+                let none = if stored_none(&pilot) { " (none stored anywhere)" } else { "" };
                 return (None, format!("{found}; nothing to guide toward{none}"));
             };
             let run = run_pilot(stats, first, Some(&coarse), n);
@@ -595,7 +594,12 @@ fn count_seen(out: &trace::PassOutput, region: &VisibleRegion) -> Vec<u64> {
 /// far short of [`PILOT_SEEN`] and of anything to learn a guide from; it took a second on every
 /// such render (a lit 8×8 floor: 1.2 s, 1.14 of them the pilot's 2^23 photons; now 0.19 s).
 fn barren(pilot: &[EmitterPilot], size: u64) -> bool {
-    size >= PILOT_PHOTONS[1] && pilot.iter().all(|e| e.stored == 0)
+    size >= PILOT_PHOTONS[1] && stored_none(pilot)
+}
+
+/// Whether no emitter's pilot photons were stored anywhere.
+fn stored_none(pilot: &[EmitterPilot]) -> bool {
+    pilot.iter().all(|e| e.stored == 0)
 }
 
 /// Photons a pilot emitted, and the seen photons it stored.
