@@ -8,7 +8,8 @@
 #   targets: scene_toml obj mtl gltf (default: all four)
 #
 # Needs a nightly toolchain (rustup) for the sanitizer flags; installs cargo-fuzz from crates.io
-# when it is missing. Seeds: the shipped Cornell file of the target's kind (gltf: tests/data/gltf/quad.gltf) and every regression
+# when it is missing. Seeds: the shipped Cornell file of the target's kind (gltf: tests/data/gltf/quad.gltf and
+# scenes/boxtextured/BoxTextured.gltf) and every regression
 # input of that kind in tests/data/fuzz/. The growing corpus stays in fuzz/corpus/<target>/
 # (not committed). A crash lands in fuzz/artifacts/<target>/: minimise it with
 # `cargo +nightly fuzz tmin <target> <file>` and add it to tests/data/fuzz/ as
@@ -37,7 +38,12 @@ for t in "${targets[@]}"; do
         *) echo "fuzz: unknown target $t (scene_toml, obj, mtl, gltf)" >&2; exit 2 ;;
     esac
     mkdir -p "$seeds/$t" "fuzz/corpus/$t"
-    if [ "$t" = gltf ]; then cp tests/data/gltf/quad.gltf "$seeds/$t/"; else cp "scenes/cornell/cornell.$ext" "$seeds/$t/"; fi
+    if [ "$t" = gltf ]; then
+        # The quad, and the textured box whose image and buffer are data: URIs (a file alone).
+        cp tests/data/gltf/quad.gltf scenes/boxtextured/BoxTextured.gltf "$seeds/$t/"
+    else
+        cp "scenes/cornell/cornell.$ext" "$seeds/$t/"
+    fi
     cp tests/data/fuzz/*."$ext" "$seeds/$t/" 2>/dev/null || true
     echo "== fuzz $t for $secs s"
     # -dict-free, one job; -max_len leaves room for whole scene files.

@@ -901,3 +901,28 @@ fn fuzz_glb_bytes() {
         prop_assert!(r.is_ok(), "{}\n--- edits {:?} cut {:?}", r.unwrap_err(), edits, cut);
     });
 }
+
+#[test]
+fn an_image_without_its_mime_type_or_any_source_is_an_error() {
+    // Found by fuzzing the gltf target from a real GLB: an image in a buffer view without its
+    // `mimeType` (or with neither `uri` nor `bufferView`) passed the `gltf` crate's validation
+    // and its `Image::source` unwrapped the missing field (gltf 1.4.1).
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("quad.bin"), GLTF_BIN).unwrap();
+    let path = dir.path().join("quad.gltf");
+    for (image, field) in [
+        (serde_json::json!({ "bufferView": 0 }), "images[0].mimeType"),
+        (serde_json::json!({}), "images[0]"),
+        (serde_json::json!({ "name": "x" }), "images[0]"),
+    ] {
+        let mut v: serde_json::Value = serde_json::from_str(GLTF).unwrap();
+        v["images"] = serde_json::json!([image]);
+        v["textures"] = serde_json::json!([{ "source": 0 }]);
+        v["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = serde_json::json!({ "index": 0 });
+        fs::write(&path, serde_json::to_vec(&v).unwrap()).unwrap();
+        let r = outcome(|| Scene::load(&path), &[], &["quad.gltf"]);
+        assert!(r.is_ok(), "{image}: {}", r.unwrap_err());
+        let e = Scene::load(&path).unwrap_err().to_string();
+        assert!(e.contains(field) && e.contains("quad.gltf"), "{image}: {e}");
+    }
+}
