@@ -623,6 +623,35 @@ fn sparse_accessors_and_u8_indices_are_read() {
 }
 
 #[test]
+fn a_gltf_alone_whose_emitters_only_glow_is_lit_by_a_white_sky_as_well() {
+    // Found on real models: controllers with a few glowing LEDs and no lights rendered black.
+    // What emits no brighter than radiance 1 (glTF's emissiveFactor alone) and gives under a
+    // quarter of what a white sky brings (7.4 W to the two triangles' bounding sphere; the
+    // emitter's 0.5 m² give 1.3 W at ke 1) glows: the sky lights the model too. Brighter
+    // (KHR_materials_emissive_strength, for lamps), or a whole room's walls, light it alone (the
+    // furnace, `the_gltf_furnace_renders_two`).
+    let dir = tempfile::tempdir().unwrap();
+    let pbr = json!({"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0});
+    for (ke, strength, sky) in
+        [(0.01, None, true), (1.0, None, true), (1.0, Some(1.0), true), (0.5, Some(4.0), false)]
+    {
+        let mut led =
+            json!({"name": "led", "pbrMetallicRoughness": pbr, "emissiveFactor": [ke, ke / 2.0, ke]});
+        let mut extra = json!({});
+        if let Some(s) = strength {
+            led["extensions"] = json!({"KHR_materials_emissive_strength": {"emissiveStrength": s}});
+            extra = json!({"extensionsUsed": ["KHR_materials_emissive_strength"]});
+        }
+        let materials = json!([{"name": "body", "pbrMetallicRoughness": pbr}, led]);
+        let s = triangles(dir.path(), &format!("led{ke}"), materials, extra);
+        let warnings = s.warnings.join("\n");
+        let lit = matches!(s.lights[..], [LightDesc::Environment { radiance: Vec3::ONE, map: None, .. }]);
+        assert_eq!(lit, sky, "ke {ke} × {strength:?}: {:?}", s.lights);
+        assert_eq!(warnings.contains("glows"), sky, "ke {ke} × {strength:?}: {warnings}");
+    }
+}
+
+#[test]
 fn a_gltf_alone_without_camera_or_lights_is_framed_and_lit_by_a_white_sky() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/boxtextured/BoxTextured.gltf");
     let s = Scene::load(&path).unwrap();

@@ -115,7 +115,8 @@ impl Scene {
     }
 
     /// [`Scene::from_file`]; for a glTF file given alone (`gltf_alone`), what it lacks is made
-    /// up and warned: a camera framing its bounds, and a white sky if nothing emits.
+    /// up and warned: a camera framing its bounds, and a white sky if it has no lights and
+    /// nothing emits, or what emits is no brighter than the sky (it glows).
     fn build(path: &Path, file: SceneFile, gltf_alone: bool) -> Result<Scene, SceneError> {
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
@@ -216,11 +217,7 @@ impl Scene {
             warnings.push(
                 "the glTF has no lights and nothing emits: it is lit by a white sky (radiance 1)".into(),
             );
-            lights.push(LightDesc::Environment {
-                radiance: Vec3::ONE,
-                map: None,
-                to_world: glam::Mat3::IDENTITY,
-            });
+            lights.push(white_sky());
         }
         if lights.is_empty() && !resolved_emits {
             warnings.push(format!(
@@ -232,7 +229,7 @@ impl Scene {
         let portals =
             file.portals.iter().enumerate().map(|(i, p)| portal(path, i, p)).collect::<Result<_, _>>()?;
         validate_render(path, &file.render, &cameras)?;
-        Ok(Scene {
+        let mut scene = Scene {
             path: path.to_owned(),
             camera,
             cameras,
@@ -248,7 +245,14 @@ impl Scene {
             lights,
             portals,
             render: file.render,
-        })
+        };
+        if gltf_alone && scene.lights.is_empty() {
+            if let Some(warning) = scene.glow() {
+                scene.warnings.push(warning);
+                scene.lights.push(white_sky());
+            }
+        }
+        Ok(scene)
     }
 
     /// Bounds of all triangles.
@@ -335,6 +339,40 @@ impl Scene {
             })
             .collect();
         maps.iter().any(Option::is_some).then_some(maps)
+    }
+
+    /// Whether what emits only glows (LEDs and screens on a model, not the lamps that light
+    /// it), said as the warning for the white sky a glTF alone is then lit by as well, as glTF
+    /// viewers light a model: nothing brighter than radiance 1 (glTF's emissiveFactor alone;
+    /// brighter takes `KHR_materials_emissive_strength`, made for lamps), and all of it giving
+    /// less than [`GLOW`] of the power a white sky brings to the model's bounding sphere.
+    fn glow(&self) -> Option<String> {
+        let brightest = self
+            .tri_material
+            .iter()
+            .map(|&m| self.materials[m as usize].emission().max_element())
+            .fold(0.0, f32::max);
+        let maps = self.emission_maps();
+        let emission = maps.as_deref().map(|maps| crate::light::EmissionTextures {
+            uvs: &self.attributes.uvs,
+            textures: &self.textures,
+            maps,
+        });
+        let area = crate::light::AreaLights::from_mesh_textured(
+            &self.mesh,
+            &self.tri_material,
+            &self.materials,
+            emission,
+        );
+        let emitted = area.power().element_sum() / 3.0;
+        let radius = 0.5 * self.mesh.bounds().extent().length();
+        let sky = std::f32::consts::PI * std::f32::consts::PI * radius * radius;
+        (brightest <= 1.0 && emitted < GLOW * sky).then(|| {
+            format!(
+                "the glTF has no lights, and what emits glows (radiance {brightest} at most, {emitted:.3e} W against \
+                 the {sky:.3e} W a white sky brings): a white sky (radiance 1) lights the model, as glTF viewers light one"
+            )
+        })
     }
 
     /// How many triangles use each material (by index: two materials with equal values are
@@ -440,6 +478,17 @@ fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneE
         c[k] = finite3(path, &format!("{field}[{k}]"), *corner)?;
     }
     Portal::from_corners(c).map_err(|e| SceneError::field(path, field, e))
+}
+
+/// The most of a white sky's power that emitters no brighter than it may give and still be taken
+/// for glows ([`Scene::glow`]). The controllers of the `@webxr-input-profiles/assets` npm package
+/// whose LEDs glow give 3e-5 to 0.13 of it (10 of its 82 models, black or nearly without the
+/// sky); a closed box whose walls all emit (the glTF furnace of `tests/gltf.rs`) 2.5.
+const GLOW: f32 = 0.25;
+
+/// The constant sky of radiance 1 a glTF alone is lit by where it has no lights of its own.
+fn white_sky() -> LightDesc {
+    LightDesc::Environment { radiance: Vec3::ONE, map: None, to_world: glam::Mat3::IDENTITY }
 }
 
 /// A warning for each `[materials.NAME]` of the scene file that no triangle uses (a typo such
