@@ -482,7 +482,7 @@ fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneE
 
 /// The most of a white sky's power that emitters no brighter than it may give and still be taken
 /// for glows ([`Scene::glow`]). The controllers of the `@webxr-input-profiles/assets` npm package
-/// whose LEDs glow give 3e-5 to 0.13 of it (10 of its 82 models, black or nearly without the
+/// whose LEDs glow give 3e-5 to 0.13 of it (11 of its 82 models, black or nearly without the
 /// sky); a closed box whose walls all emit (the glTF furnace of `tests/gltf.rs`) 2.5.
 const GLOW: f32 = 0.25;
 
