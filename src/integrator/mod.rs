@@ -24,7 +24,7 @@ use crate::config::{Integrator, RenderConfig};
 use crate::film::sums::PassSums;
 use crate::film::Film;
 use crate::frame::{Counters, Frame, Progress};
-use crate::light::{EmissionTextures, LightSet};
+use crate::light::LightSet;
 use crate::scene::{Camera, Scene};
 use crate::stats::Stats;
 use std::borrow::Cow;
@@ -157,20 +157,16 @@ impl<'s> Prepared<'s> {
                 true if scene.portals.is_empty() => &found[..],
                 true => &scene.portals[..],
             };
-            let maps = scene.emission_maps();
-            let emission = maps.as_deref().map(|maps| EmissionTextures {
-                uvs: &scene.attributes.uvs,
-                textures: &scene.textures,
-                maps,
-            });
-            LightSet::with_emission(
-                &scene.lights,
-                &scene.mesh,
-                &scene.tri_material,
-                &scene.materials,
-                portals,
-                emission,
-            )
+            scene.with_emission(|emission| {
+                LightSet::with_emission(
+                    &scene.lights,
+                    &scene.mesh,
+                    &scene.tri_material,
+                    &scene.materials,
+                    portals,
+                    emission,
+                )
+            })
         });
         let dark = lights.lights().iter().filter(|l| !(l.power().max_element() > 0.0)).count();
         if dark > 0 {

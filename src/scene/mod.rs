@@ -341,6 +341,17 @@ impl Scene {
         maps.iter().any(Option::is_some).then_some(maps)
     }
 
+    /// `f` of what textured emission needs ([`Scene::emission_maps`], the texture coordinates
+    /// and the textures; `None` where no material has an emission texture).
+    pub fn with_emission<T>(&self, f: impl FnOnce(Option<crate::light::EmissionTextures<'_>>) -> T) -> T {
+        let maps = self.emission_maps();
+        f(maps.as_deref().map(|maps| crate::light::EmissionTextures {
+            uvs: &self.attributes.uvs,
+            textures: &self.textures,
+            maps,
+        }))
+    }
+
     /// Whether what emits only glows (LEDs and screens on a model, not the lamps that light
     /// it), said as the warning for the white sky a glTF alone is then lit by as well, as glTF
     /// viewers light a model: nothing brighter than radiance 1 (glTF's emissiveFactor alone;
@@ -352,18 +363,14 @@ impl Scene {
             .iter()
             .map(|&m| self.materials[m as usize].emission().max_element())
             .fold(0.0, f32::max);
-        let maps = self.emission_maps();
-        let emission = maps.as_deref().map(|maps| crate::light::EmissionTextures {
-            uvs: &self.attributes.uvs,
-            textures: &self.textures,
-            maps,
+        let area = self.with_emission(|emission| {
+            crate::light::AreaLights::from_mesh_textured(
+                &self.mesh,
+                &self.tri_material,
+                &self.materials,
+                emission,
+            )
         });
-        let area = crate::light::AreaLights::from_mesh_textured(
-            &self.mesh,
-            &self.tri_material,
-            &self.materials,
-            emission,
-        );
         let emitted = area.power().element_sum() / 3.0;
         let radius = 0.5 * self.mesh.bounds().extent().length();
         let sky = std::f32::consts::PI * std::f32::consts::PI * radius * radius;

@@ -2,7 +2,7 @@
 //! triangles using each), lights with their power, portals. One [`SceneInfo`] is printed either
 //! as aligned tables (its `Display`) or as JSON (`Serialize`), so the two never disagree.
 
-use crate::light::{build_lights, EmissionTextures, Light, LightDesc};
+use crate::light::{build_lights, Light, LightDesc};
 use crate::material::Material;
 use crate::scene::{Scene, TextureRef};
 use glam::Vec3;
@@ -146,20 +146,16 @@ impl SceneInfo {
             })
             .collect();
         // The lights as the renderer builds them (textured emitters included), for their power.
-        let maps = scene.emission_maps();
-        let emission = maps.as_deref().map(|maps| EmissionTextures {
-            uvs: &scene.attributes.uvs,
-            textures: &scene.textures,
-            maps,
+        let built = scene.with_emission(|emission| {
+            build_lights(
+                &scene.lights,
+                &scene.mesh,
+                &scene.tri_material,
+                &scene.materials,
+                &scene.portals,
+                emission,
+            )
         });
-        let built = build_lights(
-            &scene.lights,
-            &scene.mesh,
-            &scene.tri_material,
-            &scene.materials,
-            &scene.portals,
-            emission,
-        );
         let lights = built
             .iter()
             .enumerate()
