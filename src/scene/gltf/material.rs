@@ -204,11 +204,13 @@ pub fn material(
             )?)
         }
     };
-    for (what, present) in [("occlusionTexture", m.occlusion_texture().is_some())] {
-        if present {
-            warnings
-                .say(format!("{what} {name}"), format!("{field}.{what} (material {name}) is not rendered"));
-        }
+    // Baked ambient occlusion stands in for the shadowing of indirect light that the photons
+    // and rays compute; read, it would count it twice.
+    if m.occlusion_texture().is_some() {
+        warnings.say(
+            format!("occlusionTexture {name}"),
+            format!("{field}.occlusionTexture (material {name}) is not read: the renderer computes occlusion itself (baked, it would count twice)"),
+        );
     }
     let cutoff = match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => None,
