@@ -116,7 +116,7 @@ impl Scene {
 
     /// [`Scene::from_file`]; for a glTF file given alone (`gltf_alone`), what it lacks is made
     /// up and warned: a camera framing its bounds, and a white sky if it has no lights and
-    /// nothing emits, or what emits is no brighter than the sky (it glows).
+    /// nothing emits, or what emits only glows (`Scene::glow`).
     fn build(path: &Path, file: SceneFile, gltf_alone: bool) -> Result<Scene, SceneError> {
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
