@@ -116,7 +116,7 @@ impl Scene {
 
     /// [`Scene::from_file`]; for a glTF file given alone (`gltf_alone`), what it lacks is made
     /// up and warned: a camera framing its bounds, and a white sky if it has no lights and
-    /// nothing emits, or what emits only glows (`Scene::glow`).
+    /// nothing emits, or what emits only glows (`Scene::sky_for_a_model`).
     fn build(path: &Path, file: SceneFile, gltf_alone: bool) -> Result<Scene, SceneError> {
         if file.meshes.is_empty() {
             return Err(SceneError::field(path, "mesh", "no [[mesh]]: the scene has no geometry"));
@@ -210,16 +210,11 @@ impl Scene {
                 "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),
             );
         }
-        let mut lights =
+        let mut lights: Vec<LightDesc> =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
         lights.extend(gltf_lights);
-        if gltf_alone && lights.is_empty() && !resolved_emits {
-            warnings.push(
-                "the glTF has no lights and nothing emits: it is lit by a white sky (radiance 1)".into(),
-            );
-            lights.push(white_sky());
-        }
-        if lights.is_empty() && !resolved_emits {
+        // (A glTF alone without lights is lit by a white sky instead: below.)
+        if lights.is_empty() && !resolved_emits && !gltf_alone {
             warnings.push(format!(
                 "{}: no [[light]] and no emissive material: the image will be black",
                 path.display()
@@ -247,7 +242,7 @@ impl Scene {
             render: file.render,
         };
         if gltf_alone && scene.lights.is_empty() {
-            if let Some(warning) = scene.glow() {
+            if let Some(warning) = scene.sky_for_a_model() {
                 scene.warnings.push(warning);
                 scene.lights.push(white_sky());
             }
@@ -352,12 +347,17 @@ impl Scene {
         }))
     }
 
-    /// Whether what emits only glows (LEDs and screens on a model, not the lamps that light
-    /// it), said as the warning for the white sky a glTF alone is then lit by as well, as glTF
-    /// viewers light a model: nothing brighter than radiance 1 (glTF's emissiveFactor alone;
-    /// brighter takes `KHR_materials_emissive_strength`, made for lamps), and all of it giving
-    /// less than [`GLOW`] of the power a white sky brings to the model's bounding sphere.
-    fn glow(&self) -> Option<String> {
+    /// Whether a model without lights is lit by a white sky, as glTF viewers light one, said as
+    /// its warning: where nothing emits, or what emits only glows (LEDs and screens on a model,
+    /// not the lamps that light it): nothing brighter than radiance 1 (glTF's emissiveFactor
+    /// alone; brighter takes `KHR_materials_emissive_strength`, made for lamps), and all of it
+    /// giving less than [`GLOW`] of the power a white sky brings to the model's bounding sphere.
+    fn sky_for_a_model(&self) -> Option<String> {
+        if self.materials.iter().all(|m| m.emission().max_element() <= 0.0) {
+            return Some(
+                "the glTF has no lights and nothing emits: it is lit by a white sky (radiance 1)".into(),
+            );
+        }
         let brightest = self
             .tri_material
             .iter()
@@ -488,7 +488,7 @@ fn portal(path: &Path, i: usize, p: &file::PortalEntry) -> Result<Portal, SceneE
 }
 
 /// The most of a white sky's power that emitters no brighter than it may give and still be taken
-/// for glows ([`Scene::glow`]). The controllers of the `@webxr-input-profiles/assets` npm package
+/// for glows ([`Scene::sky_for_a_model`]). The controllers of the `@webxr-input-profiles/assets` npm package
 /// whose LEDs glow give 3e-5 to 0.13 of it (11 of its 82 models, black or nearly without the
 /// sky); a closed box whose walls all emit (the glTF furnace of `tests/gltf.rs`) 2.5.
 const GLOW: f32 = 0.25;
