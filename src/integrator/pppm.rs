@@ -25,7 +25,8 @@
 //! as its area (the Taylor expansion's second-order term; the first cancels over a symmetric
 //! disc: Hachisuka, Jarosz and Jensen 2010), so the two estimates differ by half the larger
 //! disc's bias and `2 (L_r − L_{r/√2})` is an estimate of that bias, zero in expectation where
-//! the photon density is uniform.
+//! the photon density is uniform. The image takes off half of it, averaged over a window
+//! ([`crate::film::sums::PassSums::mean`]): the half-area disc's bias at the whole disc's noise.
 
 use super::balance::{self, Choose, PassWork};
 use super::bandwidth::{radius2_scale, summary, widenings, Model, Passes, Spread};
