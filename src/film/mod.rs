@@ -5,6 +5,7 @@
 
 pub mod partial;
 pub mod sums;
+pub mod windows;
 
 use glam::Vec3;
 use std::path::{Path, PathBuf};

@@ -15,6 +15,7 @@
 //! image converges, read from the quarters: see [`PassSums::convergence`]) and the square of
 //! the estimated bias, less the variance of that estimate.
 
+use super::windows::Windows;
 use super::Film;
 use glam::Vec3;
 use serde::Serialize;
@@ -279,37 +280,22 @@ impl PassSums {
             return None;
         }
         let (w, h, n) = (self.width, self.height, self.passes as f64);
-        // Summed-area tables of each pixel's mean probe (R, G, B) and of its variance (summed
-        // over the channels: the spread of the passes' probes).
-        let (w1, h1) = (w + 1, h + 1);
-        let mut table = vec![[0f64; 4]; w1 * h1];
-        for y in 0..h {
-            let mut row = [0f64; 4];
-            for x in 0..w {
-                let v = &self.values[y * w + x];
-                let probe: [f64; 3] = std::array::from_fn(|c| float(v[PROBE + c]) / n);
-                let squares: f64 = probe.iter().map(|p| p * p).sum::<f64>() * n;
-                let variance = if n > 1.0 {
-                    ((float(v[PROBE_SQUARES]) - squares) / (n - 1.0)).max(0.0) / n
-                } else {
-                    0.0
-                };
-                for (k, value) in probe.into_iter().chain([variance]).enumerate() {
-                    row[k] += value;
-                }
-                let above = table[y * w1 + x + 1];
-                table[(y + 1) * w1 + x + 1] = std::array::from_fn(|k| above[k] + row[k]);
-            }
-        }
+        // Each pixel's mean probe (R, G, B) and its variance (summed over the channels: the
+        // spread of the passes' probes), summed over windows.
+        let windows = Windows::new(w, h, |x, y| {
+            let v = &self.values[y * w + x];
+            let probe: [f64; 3] = std::array::from_fn(|c| float(v[PROBE + c]) / n);
+            let squares: f64 = probe.iter().map(|p| p * p).sum::<f64>() * n;
+            let variance =
+                if n > 1.0 { ((float(v[PROBE_SQUARES]) - squares) / (n - 1.0)).max(0.0) / n } else { 0.0 };
+            [probe[0], probe[1], probe[2], variance]
+        });
         let mut out = Vec::with_capacity(w * h);
         for y in 0..h {
-            let (y0, y1) = (y.saturating_sub(PROBE_WINDOW), (y + PROBE_WINDOW + 1).min(h));
             for x in 0..w {
-                let (x0, x1) = (x.saturating_sub(PROBE_WINDOW), (x + PROBE_WINDOW + 1).min(w));
-                let at = |x: usize, y: usize| table[y * w1 + x];
-                let (a, b, c, d) = (at(x1, y1), at(x0, y1), at(x1, y0), at(x0, y0));
-                let count = ((x1 - x0) * (y1 - y0)) as f64;
-                let mean = |k: usize| (a[k] - b[k] - c[k] + d[k]) / count;
+                let (sums, count) = windows.around(x, y, PROBE_WINDOW);
+                let count = count as f64;
+                let mean = |k: usize| sums[k] / count;
                 out.push(Correction {
                     value: Vec3::new(mean(0) as f32, mean(1) as f32, mean(2) as f32) * 0.5,
                     // Half of a mean of `count` pixels' probes, taken as independent.

@@ -56,6 +56,7 @@ use super::probe;
 use super::sppm::for_each_flux;
 use crate::accel::Accel;
 use crate::config::RenderConfig;
+use crate::film::windows::Windows;
 use crate::frame::specular::Landing;
 use crate::frame::{Counters, Frame};
 use crate::photon::footprint::{Footprint, CLEAR};
@@ -222,45 +223,32 @@ impl Spread {
 /// shrinks it.
 pub(super) fn widenings(spreads: &[Spread], width: usize, model: &Model) -> Widened {
     let height = spreads.len() / width.max(1);
-    // Summed-area tables over the measured pixels (the squared bias, the photons' variance,
-    // the caustics' squared bias, how many) and over the others seen (the squared bias, the
+    // Window sums over the measured pixels (the squared bias, the photons' variance, the
+    // caustics' squared bias, how many) and over the others seen (the squared bias, the
     // variance, how many).
-    let (w1, h1) = (width + 1, height + 1);
-    let mut table = vec![[0f64; 7]; w1 * h1];
-    for y in 0..height {
-        let mut row = [0f64; 7];
-        for x in 0..width {
-            let s = &spreads[y * width + x];
-            if s.measured {
-                for (i, v) in [s.bias2, s.var, s.fixed2, 1.0].into_iter().enumerate() {
-                    row[i] += v;
-                }
-            } else if s.var > 0.0 {
-                for (i, v) in [s.fixed2, s.var, 1.0].into_iter().enumerate() {
-                    row[4 + i] += v;
-                }
-            }
-            let above = table[y * w1 + x + 1];
-            table[(y + 1) * w1 + x + 1] = std::array::from_fn(|i| above[i] + row[i]);
+    let windows = Windows::new(width, height, |x, y| {
+        let s = &spreads[y * width + x];
+        if s.measured {
+            [s.bias2, s.var, s.fixed2, 1.0, 0.0, 0.0, 0.0]
+        } else if s.var > 0.0 {
+            [0.0, 0.0, 0.0, 0.0, s.fixed2, s.var, 1.0]
+        } else {
+            [0.0; 7]
         }
-    }
+    });
     // Each pixel's window means over the pixels of its own kind.
     let mut pooled = vec![Pooled::default(); spreads.len()];
     for y in 0..height {
-        let (y0, y1) = (y.saturating_sub(WINDOW), (y + WINDOW + 1).min(height));
         for x in 0..width {
-            let (x0, x1) = (x.saturating_sub(WINDOW), (x + WINDOW + 1).min(width));
-            let at = |x: usize, y: usize| table[y * w1 + x];
-            let (a, b, c, d) = (at(x1, y1), at(x0, y1), at(x1, y0), at(x0, y0));
-            let sum = |i: usize| a[i] - b[i] - c[i] + d[i];
+            let (sum, _) = windows.around(x, y, WINDOW);
             let s = &spreads[y * width + x];
             pooled[y * width + x] = if s.measured {
-                let n = sum(3).max(1.0);
-                Pooled { bias2: sum(0) / n, var: sum(1) / n, fixed2: sum(2) / n, least: 1.0, most: s.room }
+                let n = sum[3].max(1.0);
+                Pooled { bias2: sum[0] / n, var: sum[1] / n, fixed2: sum[2] / n, least: 1.0, most: s.room }
             } else if s.var > 0.0 {
-                let n = sum(6).max(1.0);
+                let n = sum[6].max(1.0);
                 let least = model.least();
-                Pooled { bias2: 0.0, var: sum(5) / n, fixed2: sum(4) / n, least, most: least }
+                Pooled { bias2: 0.0, var: sum[5] / n, fixed2: sum[4] / n, least, most: least }
             } else {
                 Pooled { least: model.least(), most: model.least(), ..Pooled::default() }
             };
