@@ -3,9 +3,10 @@
 //!
 //! Each pass's value `x` (an `f32` per pixel and channel) enters as the integer nearest to
 //! `x · 2⁶⁰` (an `i128`): integer addition is associative, so the sum of a set of passes does
-//! not depend on how they were grouped or ordered, and the image, `sum / passes`, is the same
-//! however a render was split. The resolution, 2⁻⁶⁰ ≈ 8.7e-19, is far below an `f32`'s for any
-//! radiance above 1e-12; a sum saturates at ±2⁶⁷ ≈ 1.5e20.
+//! not depend on how they were grouped or ordered, and the image (`sum / passes`, less pppm's
+//! bias correction: [`PassSums::mean`]) is the same however a render was split. The
+//! resolution, 2⁻⁶⁰ ≈ 8.7e-19, is far below an `f32`'s for any radiance above 1e-12; a sum
+//! saturates at ±2⁶⁷ ≈ 1.5e20.
 //!
 //! Per pixel it keeps, over the passes: the sum of each channel, the same over the first half
 //! of the render's passes, and for the photon estimate's bias the sum of each channel's bias
@@ -262,8 +263,8 @@ impl PassSums {
     /// Half a probe, `L_r − L_{r/√2}`, turns the estimate over the disc of radius `r` into the
     /// estimate over the disc of half its area. Its bias is the bias the passes themselves
     /// would reach once their radii had shrunk to `r/√2` (at α = 0.7 about ten times as many
-    /// passes): where the bias grows as `r^p`, `2^(−p/2)` of it (a half at an edge, `p = 1`;
-    /// a quarter for smooth light, `p = 2`), never turned over, as taking off the whole probe
+    /// passes): where the bias grows as `r^p`, `2^(−p/2)` of it (0.71 at an edge, `p = 1`;
+    /// a half for smooth light, `p = 2`), never turned over, as taking off the whole probe
     /// (exact for `p = 2` only) turns it where the bias grows faster than the area (on our
     /// atrium the whole probe read twice the image's bias and turned +0.34 % into −0.38 %;
     /// half read −0.02 %: docs/accuracy.md). The smaller disc's estimate is the noisier, by
