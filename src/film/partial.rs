@@ -3,8 +3,9 @@
 //! up with the other ranges.
 //!
 //! One layer: `R`, `G`, `B` (float32) hold the image of the part's own passes
-//! ([`PassSums::mean`]), so that any EXR viewer shows it; every sum of [`WORD_NAMES`] is four `uint32` channels `NAME.0` … `NAME.3`,
-//! the little-endian words of its `i128` (fixed point, 2⁻⁶⁰: see [`super::sums`]). The header
+//! ([`PassSums::mean`]), so that any EXR viewer shows it; every sum of [`WORD_NAMES`] is four
+//! `uint32` channels `NAME.0` … `NAME.3`, the little-endian words of its `i128` (fixed point,
+//! 2⁻⁶⁰: see [`super::sums`]). The header
 //! says what it is (`photonmap.kind`), its passes (`photonmap.pass_range`, of
 //! `photonmap.passes`), what its passes say of their bias (`photonmap.bias`), and carries the
 //! image record the caller gives (scene and settings hashes, camera, frame, version).

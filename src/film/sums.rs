@@ -104,6 +104,15 @@ const QUARTERS: [usize; 2] = [10, 11];
 /// 1.1 %, 0.5 % and 0.7 %.
 const PROBE_WINDOW: usize = 16;
 
+/// A pixel's mean bias probe over `n` passes (per channel) and the variance of that mean
+/// (summed over the channels, from the spread of the passes' probes; 0 for one pass).
+fn probe_spread(v: &[i128; WORDS], n: f64) -> ([f64; 3], f64) {
+    let sum_sq: f64 = (0..3).map(|c| float(v[PROBE + c]).powi(2)).sum();
+    let variance =
+        if n > 1.0 { ((float(v[PROBE_SQUARES]) - sum_sq / n) / (n - 1.0)).max(0.0) / n } else { 0.0 };
+    (std::array::from_fn(|c| float(v[PROBE + c]) / n), variance)
+}
+
 /// `R + G + B` of three fixed-point sums (what the quarters keep).
 #[inline]
 fn total(rgb: &[i128]) -> i128 {
@@ -284,11 +293,7 @@ impl PassSums {
         // Each pixel's mean probe (R, G, B) and its variance (summed over the channels: the
         // spread of the passes' probes), summed over windows.
         let windows = Windows::new(w, h, |x, y| {
-            let v = &self.values[y * w + x];
-            let probe: [f64; 3] = std::array::from_fn(|c| float(v[PROBE + c]) / n);
-            let squares: f64 = probe.iter().map(|p| p * p).sum::<f64>() * n;
-            let variance =
-                if n > 1.0 { ((float(v[PROBE_SQUARES]) - squares) / (n - 1.0)).max(0.0) / n } else { 0.0 };
+            let (probe, variance) = probe_spread(&self.values[y * w + x], n);
             [probe[0], probe[1], probe[2], variance]
         });
         let mut out = Vec::with_capacity(w * h);
@@ -348,9 +353,8 @@ impl PassSums {
                 // the probe, the estimate over the true error fell on every scene measured, by
                 // up to 0.15 (the fluted column's to 0.63; docs/accuracy.md).
                 Bias::Probed => {
-                    let sum_sq: f64 = (0..3).map(|c| float(v[PROBE + c]).powi(2)).sum();
-                    let probe_variance = ((float(v[PROBE_SQUARES]) - sum_sq / n) / (n - 1.0)).max(0.0) / n;
-                    sum_sq / (n * n) - probe_variance
+                    let (probe, variance) = probe_spread(v, n);
+                    probe.iter().map(|p| p * p).sum::<f64>() - variance
                 }
                 Bias::Zero | Bias::Unknown => 0.0,
             };
