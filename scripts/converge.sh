@@ -8,6 +8,8 @@
 #   BUDGETS   seconds, comma-separated (default 1,2,5,10,20,45: the peers' 5, 20 and 45 s among them)
 #   METHODS   comma-separated (default: photon-rgb,photon-channel,final-gather,sppm,path; also
 #             photon-default, the two-pass defaults `render --time` runs, and pppm)
+# SEED=N sets the renders' seed (default 1). The reference's noise, where its .txt record gives
+# it, is passed as --reference-noise.
 # SCENES="cornell caustics" limits the scenes (a variant such as sunroom-portal is found beside
 # its scene; REF_sunroom_portal=sunroom names its reference); OUT=dir changes the output directory.
 set -euo pipefail
@@ -25,9 +27,16 @@ for s in ${SCENES:-cornell caustics pointlight furnace}; do
     [ -f "$toml" ] || toml=$(ls scenes/*/"$s.toml")
     ref_var="REF_${s//-/_}"
     ref=${!ref_var:-$s}
-    ./target/release/photonmap converge "$toml" --reference "$refs/$ref.exr" \
+    # The reference's own noise, from its record (scripts/mitsuba_reference.py writes it), is
+    # taken out of the slope and of the estimate's calibration.
+    noise=()
+    if [ -f "$refs/$ref.txt" ]; then
+        n=$(sed -n 's/^noise RMSE[^:]*: *//p' "$refs/$ref.txt")
+        if [ -n "$n" ]; then noise=(--reference-noise "$n"); fi
+    fi
+    ./target/release/photonmap converge "$toml" --reference "$refs/$ref.exr" "${noise[@]}" \
         --budgets "$budgets" --methods "$methods" --csv "$out/$s.csv" --plot "$out/$s.svg" \
-        --peers docs/converge/peers.csv
+        --peers docs/converge/peers.csv --seed "${SEED:-1}"
     if command -v rsvg-convert >/dev/null; then
         rsvg-convert "$out/$s.svg" -o "$out/$s.png"
     fi

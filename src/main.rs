@@ -655,7 +655,13 @@ fn converge(args: cli::ConvergeArgs) -> Result<()> {
     outln!();
     for &m in &study.methods {
         if let Some(s) = converge::slope(&points, m) {
-            outln!("{:<16} log-log slope of RMSE against time {s:+.2}", m.name());
+            let less_noise = match converge::true_slope(&points, m) {
+                Some(t) if study.reference_noise > 0.0 => {
+                    format!(" ({t:+.2} with the reference's noise taken out)")
+                }
+                _ => String::new(),
+            };
+            outln!("{:<16} log-log slope of RMSE against time {s:+.2}{less_noise}", m.name());
         }
     }
     for &m in &study.methods {

@@ -181,10 +181,22 @@ pub fn run(
 /// with α = 0.7 its RMSE tends to a slope of -0.3 to -0.35, while the camera samples' noise
 /// (direct light, edges) falls at -0.5. A fixed photon count levels off at its bias (slope 0).
 pub fn slope(points: &[Point], method: Method) -> Option<f64> {
+    slope_of(points, method, |p| p.rmse)
+}
+
+/// [`slope`] of the true RMSE ([`Point::true_rmse`]: the reference's own noise taken out in
+/// quadrature), which a noisy reference otherwise flattens.
+pub fn true_slope(points: &[Point], method: Method) -> Option<f64> {
+    slope_of(points, method, |p| p.true_rmse)
+}
+
+/// Least-squares slope of log(`error(point)`) against log(seconds) for `method`, over its
+/// points with a positive error.
+fn slope_of(points: &[Point], method: Method, error: impl Fn(&Point) -> f64) -> Option<f64> {
     let xy: Vec<(f64, f64)> = points
         .iter()
-        .filter(|p| p.method == method && p.seconds > 0.0 && p.rmse > 0.0)
-        .map(|p| (p.seconds.ln(), p.rmse.ln()))
+        .filter(|p| p.method == method && p.seconds > 0.0 && error(p) > 0.0)
+        .map(|p| (p.seconds.ln(), error(p).ln()))
         .collect();
     if xy.len() < 2 {
         return None;
@@ -423,6 +435,22 @@ mod tests {
             [1.0, 2.0, 4.0, 8.0].iter().map(|&t| point(Method::Path, t, 0.1 * f64::powf(t, -0.5))).collect();
         assert!((slope(&pts, Method::Path).unwrap() + 0.5).abs() < 1e-9);
         assert_eq!(slope(&pts, Method::Sppm), None);
+    }
+
+    /// A render whose error falls as `t^-0.5` against a reference with noise of its own: the
+    /// RMSE against the reference falls more slowly, the true one as the render's.
+    #[test]
+    fn true_slope_takes_the_references_noise_out() {
+        let noise = 0.02;
+        let pts: Vec<Point> = [20.0, 45.0]
+            .iter()
+            .map(|&t: &f64| {
+                let own = 0.1 * t.powf(-0.5);
+                Point { true_rmse: own, ..point(Method::Pppm, t, (own * own + noise * noise).sqrt()) }
+            })
+            .collect();
+        assert!(slope(&pts, Method::Pppm).unwrap() > -0.4);
+        assert!((true_slope(&pts, Method::Pppm).unwrap() + 0.5).abs() < 1e-9);
     }
 
     #[test]
