@@ -502,6 +502,67 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     assert_eq!((s.camera.width, s.camera.height), (256, 256));
 }
 
+/// glTF's `metallicRoughnessTexture` (blue the metallic value, green the roughness, linear,
+/// times the factors) decides the material texel by texel: a model's metal parts are drawn as
+/// metal and the rest as the plastic or matte surface the texture says. It was warned about
+/// and left out, every texel drawn as the factors alone say.
+#[test]
+fn the_metallic_roughness_texture_decides_each_texels_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Left to right: matte (metallic 0, roughness 1), plastic (0, 0.2), metal (1, 0.6), polished
+    // metal (1, 0).
+    let texels = [[0u8, 255, 0], [0, 51, 0], [0, 153, 255], [0, 0, 255]];
+    image::RgbImage::from_fn(4, 1, |x, _| image::Rgb(texels[x as usize])).save(d.join("mr.png")).unwrap();
+    let pbr = |rough: f32| {
+        json!({"baseColorFactor": [0.5, 0.4, 0.3, 1.0], "metallicFactor": 1.0, "roughnessFactor": rough,
+               "metallicRoughnessTexture": {"index": 0}})
+    };
+    let materials = json!([
+        {"name": "parts", "pbrMetallicRoughness": pbr(1.0)},
+        {"name": "chrome", "pbrMetallicRoughness": pbr(0.0)}
+    ]);
+    let extra = json!({"textures": [{"source": 0, "sampler": 0}], "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+                       "images": [{"uri": "mr.png"}]});
+    let s = triangles(d, "mr", materials, extra);
+    let warnings = s.warnings.join("\n");
+    assert!(!warnings.contains("metallicRoughnessTexture"), "{warnings}");
+    let id = |name: &str| s.material_names.iter().position(|m| m == name).unwrap();
+    let at = |name: &str, u: f32| {
+        let prim = s.tri_material.iter().position(|&m| m as usize == id(name)).unwrap() as u32;
+        s.material_at(prim, glam::Vec2::new(u, 0.5))
+    };
+    let (base, ns) = (Vec3::new(0.5, 0.4, 0.3), photonmap::scene::phong_exponent);
+    let plastic = |ns: f32| Material::Glossy { kd: 0.96 * base, ks: Vec3::splat(0.04), ns };
+    let metal = |ns: f32| Material::Glossy { kd: Vec3::ZERO, ks: base, ns };
+    // The factors alone make "parts" a rough metal, as every texel was drawn before.
+    assert_eq!(s.materials[id("parts")], metal(0.0));
+    assert_eq!(at("parts", 0.125), Material::Diffuse { kd: base });
+    assert_eq!(at("parts", 0.375), plastic(ns(51.0 / 255.0)));
+    assert_eq!(at("parts", 0.625), metal(ns(153.0 / 255.0)));
+    // Roughness 0 where the factors do not make a mirror: the sharpest lobe (the scene finds its
+    // mirrors, which caustics are aimed at, by the material).
+    assert_eq!(at("parts", 0.875), metal(photonmap::scene::MAX_NS));
+    // roughnessFactor 0: every texel polished; the metal ones mirrors, as the material is.
+    assert_eq!(s.materials[id("chrome")], Material::Mirror { ks: base });
+    assert_eq!(at("chrome", 0.625), Material::Mirror { ks: base });
+    assert_eq!(at("chrome", 0.125), plastic(photonmap::scene::MAX_NS));
+    let r = RenderSettings { integrator: Some(IntegratorKind::Photon), ..settings() };
+    render_checked(&s, &r, 8);
+    // A scene file that sets the material's constants takes it over: the texture is set aside.
+    let toml = "[[mesh]]\ngltf = \"mr.gltf\"\n\n[materials.parts]\ntype = \"diffuse\"\n";
+    std::fs::write(d.join("s.toml"), toml).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    let parts = s.material_names.iter().position(|m| m == "parts").unwrap();
+    assert!(s.maps[parts].metal_rough.is_none());
+    let warnings = s.warnings.join("\n");
+    assert!(
+        warnings
+            .contains("materials.parts.type is given, so the glTF's metallicRoughnessTexture is not used"),
+        "{warnings}"
+    );
+}
+
 #[test]
 fn alpha_mask_cuts_at_the_cutoff_of_texture_alpha_times_factor_alpha() {
     let dir = tempfile::tempdir().unwrap();

@@ -64,9 +64,12 @@ impl Analysis {
         let any = |f: fn(&crate::material::Material) -> bool| {
             scene.materials.iter().zip(&used).any(|(m, &u)| u && f(m))
         };
+        // A glTF metallic-roughness texture can make any texel plastic or matte (never a mirror
+        // where the material is not one: `MetalRough`).
+        let textured_diffuse = scene.maps.iter().zip(&used).any(|(maps, &u)| u && maps.metal_rough.is_some());
         Analysis {
             has_specular: any(|m| m.is_specular()),
-            has_diffuse: any(|m| m.is_diffuse_like()),
+            has_diffuse: any(|m| m.is_diffuse_like()) || textured_diffuse,
             light_power: lights.total_power(),
             aim: OnceCell::new(),
             guide: OnceCell::new(),

@@ -232,6 +232,79 @@ impl TextureRef {
     }
 }
 
+/// The highest Phong exponent a glTF roughness maps to.
+pub const MAX_NS: f32 = 1e4;
+
+/// The Phong exponent of glTF roughness `r`: `2/α² − 2` with `α = r²` (Walter et al. 2007's
+/// Beckmann–Phong correspondence, with Disney's / glTF's `α = roughness²`), in [0, 10⁴].
+pub fn phong_exponent(r: f32) -> f32 {
+    let alpha = r.clamp(0.0, 1.0).powi(2);
+    if alpha <= 0.0 {
+        return MAX_NS;
+    }
+    (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_NS)
+}
+
+/// What a glTF metallic-roughness material (neither emissive nor transmissive) is drawn as,
+/// by its metallic and roughness values (README, "glTF 2.0"): the glTF loader picks one from
+/// the factors, [`MetalRough`] one per texel of a `metallicRoughnessTexture`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MetalRoughKind {
+    /// Metallic ≥ 0.5, roughness 0: `mirror`, `ks` = base colour.
+    Mirror,
+    /// Metallic ≥ 0.5: `glossy`, `kd` = 0, `ks` = base colour, `ns` from the roughness.
+    Metal,
+    /// Metallic < 0.5, roughness < 0.5: `glossy`, `kd` = 0.96 base colour, `ks` = 0.04.
+    Plastic,
+    /// Metallic < 0.5, roughness ≥ 0.5: `diffuse`, `kd` = base colour.
+    Matte,
+}
+
+impl MetalRoughKind {
+    pub fn of(metal: f32, rough: f32) -> MetalRoughKind {
+        match (metal >= 0.5, rough) {
+            (true, r) if r <= 0.0 => MetalRoughKind::Mirror,
+            (true, _) => MetalRoughKind::Metal,
+            (false, r) if r < 0.5 => MetalRoughKind::Plastic,
+            (false, _) => MetalRoughKind::Matte,
+        }
+    }
+}
+
+/// A glTF `metallicRoughnessTexture` (linear; blue the metallic value, green the roughness,
+/// times the material's factors) with the base colour: the material at each texel is what
+/// [`MetalRoughKind`] makes of that texel's values, so the metal parts of a model are drawn
+/// as metal and the rest as the plastic or matte surface the texture says. A texel is drawn as
+/// a mirror only where the material's factors make it one too (the scene's analysis finds its
+/// specular surfaces, for caustics, by the material, not by the texel); elsewhere a roughness
+/// of 0 is the sharpest glossy lobe ([`MAX_NS`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MetalRough {
+    /// The texture, its factor `(0, roughnessFactor, metallicFactor)`.
+    pub texture: TextureRef,
+    /// `baseColorFactor`'s colour.
+    pub base: Vec3,
+    /// `baseColorTexture`, its factor `baseColorFactor`'s colour.
+    pub base_texture: Option<TextureRef>,
+}
+
+impl MetalRough {
+    /// The material at `uv` of a material whose factors alone make it `m`.
+    #[inline]
+    pub fn at(&self, m: Material, textures: &Textures, uv: Vec2) -> Material {
+        let t = self.texture.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE);
+        let (metal, rough) = (t.z, t.y);
+        let base = self.base_texture.map_or(self.base, |b| b.rgb(textures, uv)).clamp(Vec3::ZERO, Vec3::ONE);
+        let glossy = |kd: Vec3, ks: Vec3| Material::Glossy { kd, ks, ns: phong_exponent(rough) };
+        match MetalRoughKind::of(metal, rough) {
+            MetalRoughKind::Mirror if m.is_specular() => Material::Mirror { ks: base },
+            MetalRoughKind::Mirror | MetalRoughKind::Metal => glossy(Vec3::ZERO, base),
+            MetalRoughKind::Plastic => glossy(0.96 * base, Vec3::splat(0.04)),
+            MetalRoughKind::Matte => Material::Diffuse { kd: base },
+        }
+    }
+}
+
 /// The textures of one material: each replaces the constant it is named after (an MTL
 /// `map_Kd` is the diffuse colour, whatever `Kd` says, as Blender and 3ds Max read it).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -254,6 +327,10 @@ pub struct MaterialMaps {
     pub ke: Option<TextureRef>,
     /// `map_d` / `alpha_texture` / glTF `alphaMode` MASK: an alpha cut-out (see [`AlphaMap`]).
     pub alpha: Option<AlphaMap>,
+    /// glTF's `metallicRoughnessTexture`: the material's kind and constants decided texel by
+    /// texel (see [`MetalRough`]); over `kd` and `ks`, which hold the base colour map for the
+    /// kind the factors alone give.
+    pub metal_rough: Option<MetalRough>,
 }
 
 /// The MTL `map_d` and glTF `alphaCutoff` threshold when none is given.
@@ -292,13 +369,16 @@ impl AlphaMap {
 impl MaterialMaps {
     /// Whether no texture changes the material's constants (a normal map may still bend it).
     pub fn is_empty(&self) -> bool {
-        self.kd.is_none() && self.ks.is_none() && self.ke.is_none()
+        self.kd.is_none() && self.ks.is_none() && self.ke.is_none() && self.metal_rough.is_none()
     }
 
     /// `m` with its textured constants looked up at `uv`. Albedos are clamped to `[0, 1]`, and
     /// a glossy material's `kd + ks` scaled down to 1 where a texture pushes it past.
     #[inline]
     pub fn apply(&self, m: Material, textures: &Textures, uv: Vec2) -> Material {
+        if let Some(mr) = &self.metal_rough {
+            return mr.at(m, textures, uv);
+        }
         let albedo = |t: Option<TextureRef>, c: Vec3| {
             t.map_or(c, |t| t.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE))
         };
@@ -450,6 +530,23 @@ fn texture_maps(
                 Some(b) => b.factor = Vec3::splat(scale),
                 None => return Err(SceneError::field(path, field, "the material has no bump map to scale")),
             }
+        }
+    }
+    if let (Some(_), Some(e)) = (maps.metal_rough, entry) {
+        let set = [
+            ("type", e.kind.is_some()),
+            ("kd", e.kd.is_some()),
+            ("ks", e.ks.is_some()),
+            ("ns", e.ns.is_some()),
+            ("kd_texture", e.kd_texture.is_some()),
+            ("ks_texture", e.ks_texture.is_some()),
+        ];
+        if let Some((field, _)) = set.iter().find(|(_, given)| *given) {
+            warnings.push(format!(
+                "{}: materials.{name}.{field} is given, so the glTF's metallicRoughnessTexture is not used",
+                path.display()
+            ));
+            maps.metal_rough = None;
         }
     }
     let uses_kd = matches!(m, Material::Diffuse { .. } | Material::Glossy { .. } | Material::Emissive { .. });

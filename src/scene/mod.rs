@@ -14,13 +14,15 @@ mod materials;
 mod obj;
 mod transform;
 
-pub use self::gltf::phong_exponent;
 pub use camera::{Camera, CameraKey, Lens, MotionError, SceneCamera, Turntable, MAX_FRAMES};
 pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
 };
-pub use materials::{AlphaMap, MaterialMaps, TextureRef, DEFAULT_ALPHA_CUTOFF};
+pub use materials::{
+    phong_exponent, AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
+    MAX_NS,
+};
 pub use obj::{MtlMap, MtlMaterial};
 
 use crate::config::RenderSettings;

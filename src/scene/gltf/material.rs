@@ -17,7 +17,9 @@
 //! `alphaCutoff` of the base colour's alpha (texture alpha × factor alpha); BLEND is drawn as
 //! MASK at 0.5, warned. Textures not rendered are named in the warnings.
 
-use super::super::materials::{AlphaMap, MaterialMaps, TextureRef, DEFAULT_ALPHA_CUTOFF};
+use super::super::materials::{
+    phong_exponent, AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
+};
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
 use super::data::{at, uri_bytes, Buffers};
@@ -27,19 +29,6 @@ use glam::{Vec2, Vec3, Vec4};
 use gltf::texture::WrappingMode;
 use std::collections::HashMap;
 use std::path::Path;
-
-/// The highest Phong exponent a glTF roughness maps to.
-pub const MAX_NS: f32 = 1e4;
-
-/// The Phong exponent of glTF roughness `r`: `2/α² − 2` with `α = r²` (Walter et al. 2007's
-/// Beckmann–Phong correspondence, with Disney's / glTF's `α = roughness²`), in [0, 10⁴].
-pub fn phong_exponent(r: f32) -> f32 {
-    let alpha = r.clamp(0.0, 1.0).powi(2);
-    if alpha <= 0.0 {
-        return MAX_NS;
-    }
-    (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_NS)
-}
 
 /// Images already turned into textures, by glTF image index.
 pub struct Images<'a> {
@@ -180,12 +169,18 @@ pub fn material(
         }
         None => None,
     };
-    if pbr.metallic_roughness_texture().is_some() {
-        warnings.say(
-            format!("mr {name}"),
-            format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not rendered; the factors are used"),
-        );
-    }
+    // Blue the metallic value, green the roughness (linear), times the factors.
+    let metal_rough = match pbr.metallic_roughness_texture() {
+        Some(info) => Some(images.reference_to(
+            &format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture"),
+            info.texture(),
+            info.tex_coord(),
+            Vec3::new(0.0, rough, metal),
+            Encoding::Data,
+            warnings,
+        )?),
+        None => None,
+    };
     let normal = match m.normal_texture() {
         None => None,
         Some(nt) => {
@@ -280,26 +275,34 @@ pub fn material(
                 format!("material {name}: glass is clear; its base colour does not tint it"),
             );
         }
-    } else if metal >= 0.5 {
-        mtl.ks = Some(unit(base));
-        maps.ks = base_map;
-        if rough <= 0.0 {
-            mtl.illum = Some(3);
-        } else {
-            mtl.illum = Some(2);
-            mtl.kd = Some([0.0; 3]);
-            mtl.ns = Some(phong_exponent(rough));
-        }
-    } else if rough < 0.5 {
-        mtl.illum = Some(2);
-        mtl.kd = Some(unit(base * 0.96));
-        mtl.ks = Some([0.04; 3]);
-        mtl.ns = Some(phong_exponent(rough));
-        maps.kd = base_map.map(|t| TextureRef { factor: t.factor * 0.96, ..t });
     } else {
-        mtl.illum = Some(1);
-        mtl.kd = Some(unit(base));
-        maps.kd = base_map;
+        maps.metal_rough = metal_rough.map(|texture| MetalRough { texture, base, base_texture: base_map });
+        match MetalRoughKind::of(metal, rough) {
+            MetalRoughKind::Mirror => {
+                mtl.illum = Some(3);
+                mtl.ks = Some(unit(base));
+                maps.ks = base_map;
+            }
+            MetalRoughKind::Metal => {
+                mtl.illum = Some(2);
+                mtl.kd = Some([0.0; 3]);
+                mtl.ks = Some(unit(base));
+                mtl.ns = Some(phong_exponent(rough));
+                maps.ks = base_map;
+            }
+            MetalRoughKind::Plastic => {
+                mtl.illum = Some(2);
+                mtl.kd = Some(unit(base * 0.96));
+                mtl.ks = Some([0.04; 3]);
+                mtl.ns = Some(phong_exponent(rough));
+                maps.kd = base_map.map(|t| TextureRef { factor: t.factor * 0.96, ..t });
+            }
+            MetalRoughKind::Matte => {
+                mtl.illum = Some(1);
+                mtl.kd = Some(unit(base));
+                maps.kd = base_map;
+            }
+        }
     }
     if base.max_element() > 1.0 || base.min_element() < 0.0 {
         warnings.say(
@@ -313,6 +316,7 @@ pub fn material(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::MAX_NS;
 
     #[test]
     fn roughness_to_phong() {

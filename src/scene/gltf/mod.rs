@@ -13,8 +13,6 @@
 mod data;
 mod material;
 
-pub use material::phong_exponent;
-
 use super::camera::Camera;
 use super::obj::MtlMaterial;
 use super::{MaterialMaps, SceneError};
