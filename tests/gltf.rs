@@ -563,6 +563,25 @@ fn the_metallic_roughness_texture_decides_each_texels_material() {
     );
 }
 
+/// A material whose factors make it a mirror, but whose metallic-roughness texture makes it
+/// polished plastic: its texels store photons, so the photon maps are traced (the scene's
+/// analysis went by the factors alone, found nothing diffuse and skipped them).
+#[test]
+fn a_mirror_whose_texture_makes_it_plastic_still_gets_photon_maps() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([0, 0, 0])).save(d.join("plastic.png")).unwrap();
+    let pbr = json!({"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0,
+                     "metallicRoughnessTexture": {"index": 0}});
+    let materials = json!([{"name": "chrome", "pbrMetallicRoughness": pbr}]);
+    let extra = json!({"textures": [{"source": 0}], "images": [{"uri": "plastic.png"}]});
+    let s = triangles(d, "plastic", materials, extra);
+    assert_eq!(s.materials[0], Material::Mirror { ks: Vec3::splat(0.8) });
+    let out = render_checked(&s, &settings(), 8);
+    let indirect = out.stats.stages.iter().find(|st| st.name == "photons.indirect").expect("the stage");
+    assert!(indirect.ran, "photons.indirect skipped: {}", indirect.reason);
+}
+
 #[test]
 fn alpha_mask_cuts_at_the_cutoff_of_texture_alpha_times_factor_alpha() {
     let dir = tempfile::tempdir().unwrap();
