@@ -54,7 +54,8 @@ pub struct MaterialInfo {
     /// The constants, by their scene-file names (`kd`, `ks`, `ns`, `ior`, `ke`).
     #[serde(serialize_with = "as_map")]
     pub parameters: Vec<(&'static str, Vec<f32>)>,
-    /// The textures, by slot (`kd`, `ks`, `ke`, `normal`, `bump`, `alpha`) and file.
+    /// The textures, by slot (`kd`, `ks`, `ke`, `normal`, `bump`, `alpha`,
+    /// `metallic_roughness`) and file.
     #[serde(serialize_with = "as_map")]
     pub textures: Vec<(&'static str, String)>,
 }
@@ -139,6 +140,7 @@ impl SceneInfo {
                     ("normal", maps.normal),
                     ("bump", maps.bump),
                     ("alpha", maps.alpha.map(|a| a.texture)),
+                    ("metallic_roughness", maps.metal_rough.map(|m| m.texture)),
                 ];
                 let textures = slots.into_iter().filter_map(|(slot, t)| Some((slot, file(t?)))).collect();
                 let (kind, parameters) = material_parameters(m);

@@ -12,6 +12,9 @@
 //! | metallic < 0.5, roughness < 0.5 | `glossy`, `kd` = 0.96 base colour, `ks` = 0.04, same `ns` |
 //! | metallic < 0.5, roughness ≥ 0.5 | `diffuse`, `kd` = base colour |
 //!
+//! The last four rows are chosen from the factors, and again at every texel of a
+//! `metallicRoughnessTexture` where there is one (`MetalRough`).
+//!
 //! `ns` is clamped to [0, 10⁴]. The base colour is `baseColorFactor × baseColorTexture` (the
 //! factor rides on the texture reference). `alphaMode` MASK is an alpha cut-out at
 //! `alphaCutoff` of the base colour's alpha (texture alpha × factor alpha); BLEND is drawn as
@@ -249,6 +252,13 @@ pub fn material(
         warnings.say(
             format!("tt {name}"),
             format!("{field}: transmissionTexture (material {name}) is not rendered"),
+        );
+    }
+    if metal_rough.is_some() && (ke.max_element() > 0.0 || transmission > 0.5) {
+        let kind = if ke.max_element() > 0.0 { "emissive" } else { "glass" };
+        warnings.say(
+            format!("mr-unused {name}"),
+            format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not used: the material is drawn as {kind}"),
         );
     }
     let mut mtl = MtlMaterial::default();
