@@ -420,7 +420,7 @@ fn an_unused_material_and_a_scene_without_light_are_warned() {
 
 /// An MTL as Blender writes it by default (`Kd 0.8`, `Ks 0.5`, `illum 2`) renders, its Kd and
 /// Ks scaled to conserve energy with a warning naming the MTL line; `d 0.3` and `illum 9` are
-/// warned as not rendered as written.
+/// warned as not rendered as written, and so are the PBR extension's `Pr` and `Pm`.
 #[test]
 fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
     let dir = tempfile::tempdir().unwrap();
@@ -429,7 +429,7 @@ fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
     let mtl =
         "# Blender MTL File\nnewmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.800000 0.800000 0.800000\n\
                Ks 0.500000 0.500000 0.500000\nKe 0.0 0.0 0.0\nNi 1.45\nd 1.0\nillum 2\n\n\
-               newmtl odd\nKd 0.5 0.5 0.5\nd 0.3\nillum 9\n";
+               newmtl odd\nKd 0.5 0.5 0.5\nd 0.3\nillum 9\nPr 0.5\nPm 1.0\n";
     let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
                 [[mesh]]\nobj = \"t2.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
     std::fs::write(dir.path().join("t2.obj"), obj).unwrap();
@@ -450,6 +450,7 @@ fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
     assert!(err.contains("Kd 0.61538464, Ks 0.3846154") || err.contains("(Kd 0.615"), "{err}");
     assert!(err.contains("t2.mtl:14: material odd: d 0.3 (dissolve) is not rendered"), "{err}");
     assert!(err.contains("t2.mtl:15: material odd: illum 9 is not a model"), "{err}");
+    assert!(err.contains("t2.mtl:16: material odd: Pr, Pm (MTL's PBR extension) not rendered"), "{err}");
     // The scaled material reflects what it receives at most.
     let info = run(&["info", "--json", dir.path().join("t2.toml").to_str().unwrap()]);
     let v: serde_json::Value = serde_json::from_slice(&info.stdout).unwrap();

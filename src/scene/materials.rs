@@ -3,7 +3,7 @@
 //! maps that vary it over the surface ([`MaterialMaps`]).
 
 use super::file::{nonneg3, reflectance3, MaterialEntry, MaterialKind, SceneFile};
-use super::obj::{relative_to, MtlMap, MtlMaterial};
+use super::obj::{relative_to, MtlMap, MtlMaterial, PBR_KEYWORDS};
 use super::SceneError;
 use crate::material::Material;
 use crate::texture::{Encoding, Texture, Textures, Wrap};
@@ -175,13 +175,22 @@ fn mtl_at(mtl: &MtlMaterial, keyword: &str) -> String {
 }
 
 /// Warnings for what an MTL material says that is not rendered as written: a dissolve `d`
-/// below 1 (no blending: drawn opaque) and, unless the scene file gives the material's `type`
+/// below 1 (no blending: drawn opaque), the constants of MTL's PBR extension (`Pr`, `Pm`, …)
+/// and, unless the scene file gives the material's `type`
 /// (`typed`), an `illum` model outside 0..=7 (read as diffuse).
 fn mtl_warnings(name: &str, mtl: &MtlMaterial, typed: bool, warnings: &mut Vec<String>) {
     if let Some(d) = mtl.dissolve.filter(|&d| d < 1.0) {
         warnings.push(format!(
             "{}material {name}: d {d} (dissolve) is not rendered: drawn opaque (map_d cut-outs are)",
             mtl_at(mtl, "d")
+        ));
+    }
+    let pbr: Vec<&str> = PBR_KEYWORDS.into_iter().filter(|k| mtl.lines.contains_key(*k)).collect();
+    if let Some(first) = pbr.first() {
+        warnings.push(format!(
+            "{}material {name}: {} (MTL's PBR extension) not rendered: drawn from Kd, Ks, Ns and illum",
+            mtl_at(mtl, first),
+            pbr.join(", ")
         ));
     }
     if let Some(illum) = mtl.illum.filter(|&i| i > 7 && !typed) {

@@ -366,6 +366,14 @@ fn check_mtl(path: &Path, text: &str) -> Result<(HashMap<String, Vec<MtlMap>>, S
             }
             "Kd" | "Ks" | "Ke" | "Ka" | "Tf" => 3,
             "Ns" | "Ni" | "d" | "Tr" | "illum" => 1,
+            // The PBR extension's constants: recorded where they are, for the warning that they
+            // are not rendered, and not checked (they were never read).
+            k if PBR_KEYWORDS.contains(&k) => {
+                if let Some(name) = &current {
+                    lines.entry(name.clone()).or_default().insert(keyword.to_string(), line);
+                }
+                continue;
+            }
             k if is_map(k) => {
                 let Some(name) = &current else {
                     return Err(SceneError::line(path, line, format!("`{keyword}` before any newmtl")));
@@ -405,6 +413,10 @@ fn check_mtl(path: &Path, text: &str) -> Result<(HashMap<String, Vec<MtlMap>>, S
     }
     Ok((maps, lines))
 }
+
+/// The constants of MTL's PBR extension (roughness, metallic, sheen, clearcoat, anisotropy),
+/// which are not rendered: the material is drawn from `Kd`, `Ks`, `Ns` and `illum`.
+pub const PBR_KEYWORDS: [&str; 7] = ["Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor"];
 
 /// Whether an MTL keyword names a texture map.
 fn is_map(keyword: &str) -> bool {
