@@ -254,6 +254,10 @@ pub fn phong_exponent(r: f32) -> f32 {
     (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_NS)
 }
 
+/// The specular albedo of a glTF dielectric ([`MetalRoughKind::Plastic`]): 4 % (glTF's F0 for
+/// non-metals); its diffuse albedo is the base colour times the rest.
+pub const PLASTIC_KS: f32 = 0.04;
+
 /// What a glTF metallic-roughness material (neither emissive nor transmissive) is drawn as,
 /// by its metallic and roughness values (README, "glTF 2.0"): the glTF loader picks one from
 /// the factors, [`MetalRough`] one per texel of a `metallicRoughnessTexture`.
@@ -308,7 +312,7 @@ impl MetalRough {
         match MetalRoughKind::of(metal, rough) {
             MetalRoughKind::Mirror if m.is_specular() => Material::Mirror { ks: base },
             MetalRoughKind::Mirror | MetalRoughKind::Metal => glossy(Vec3::ZERO, base),
-            MetalRoughKind::Plastic => glossy(0.96 * base, Vec3::splat(0.04)),
+            MetalRoughKind::Plastic => glossy((1.0 - PLASTIC_KS) * base, Vec3::splat(PLASTIC_KS)),
             MetalRoughKind::Matte => Material::Diffuse { kd: base },
         }
     }

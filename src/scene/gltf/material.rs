@@ -22,6 +22,7 @@
 
 use super::super::materials::{
     phong_exponent, AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
+    PLASTIC_KS,
 };
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
@@ -172,18 +173,6 @@ pub fn material(
         }
         None => None,
     };
-    // Blue the metallic value, green the roughness (linear), times the factors.
-    let metal_rough = match pbr.metallic_roughness_texture() {
-        Some(info) => Some(images.reference_to(
-            &format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture"),
-            info.texture(),
-            info.tex_coord(),
-            Vec3::new(0.0, rough, metal),
-            Encoding::Data,
-            warnings,
-        )?),
-        None => None,
-    };
     let normal = match m.normal_texture() {
         None => None,
         Some(nt) => {
@@ -254,13 +243,28 @@ pub fn material(
             format!("{field}: transmissionTexture (material {name}) is not rendered"),
         );
     }
-    if metal_rough.is_some() && (ke.max_element() > 0.0 || transmission > 0.5) {
-        let kind = if ke.max_element() > 0.0 { "emissive" } else { "glass" };
-        warnings.say(
-            format!("mr-unused {name}"),
-            format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not used: the material is drawn as {kind}"),
-        );
-    }
+    // Blue the metallic value, green the roughness (linear), times the factors; read only where
+    // the material is drawn by them (not emissive, not glass).
+    let emissive_or_glass =
+        (ke.max_element() > 0.0).then_some("emissive").or((transmission > 0.5).then_some("glass"));
+    let metal_rough = match (pbr.metallic_roughness_texture(), emissive_or_glass) {
+        (None, _) => None,
+        (Some(_), Some(kind)) => {
+            warnings.say(
+                format!("mr-unused {name}"),
+                format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture (material {name}) is not used: the material is drawn as {kind}"),
+            );
+            None
+        }
+        (Some(info), None) => Some(images.reference_to(
+            &format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture"),
+            info.texture(),
+            info.tex_coord(),
+            Vec3::new(0.0, rough, metal),
+            Encoding::Data,
+            warnings,
+        )?),
+    };
     let mut mtl = MtlMaterial::default();
     let mut maps = MaterialMaps { normal, alpha: alpha_map, ..MaterialMaps::default() };
     let unit = |v: Vec3| v.clamp(Vec3::ZERO, Vec3::ONE).to_array();
@@ -302,10 +306,10 @@ pub fn material(
             }
             MetalRoughKind::Plastic => {
                 mtl.illum = Some(2);
-                mtl.kd = Some(unit(base * 0.96));
-                mtl.ks = Some([0.04; 3]);
+                mtl.kd = Some(unit(base * (1.0 - PLASTIC_KS)));
+                mtl.ks = Some([PLASTIC_KS; 3]);
                 mtl.ns = Some(phong_exponent(rough));
-                maps.kd = base_map.map(|t| TextureRef { factor: t.factor * 0.96, ..t });
+                maps.kd = base_map.map(|t| TextureRef { factor: t.factor * (1.0 - PLASTIC_KS), ..t });
             }
             MetalRoughKind::Matte => {
                 mtl.illum = Some(1);
