@@ -44,10 +44,11 @@
 //! # Custom metrics (flattened gather)
 //!
 //! [`KdTree::knn_with`] and [`KdTree::for_each_within_with`] take a squared "distance" function
-//! of the offset `item - query`. Pruning compares the squared distance from the query to a
-//! splitting plane, `(q[a] - s)²`, against the current search radius. That is only correct if
-//! for every offset `d`: `metric(d) ≥ d[a]²` for each axis `a`; **a metric that is never smaller
-//! than the squared Euclidean distance satisfies this**. The photon-gather metric of
+//! of the offset `item - query`. Pruning compares the squared Euclidean distance from the query
+//! to a subtree's cell (the box its splitting planes cut out) against the current search
+//! radius. That is only correct if for every offset `d`: `metric(d) ≥ |d|²` as
+//! `Vec3::length_squared` computes it; **a metric that is never smaller than the squared
+//! Euclidean distance** (computed as `length_squared`, or added to it) satisfies this. The photon-gather metric of
 //! [`flattened_metric`], `|d|² + (s - 1)(n·d)²` with `s ≥ 1`, is such a metric: it stretches
 //! distances along the surface normal `n`, which flattens the search region into a disc lying in
 //! the surface (Jensen 2001, §7.2 uses the same idea to avoid collecting photons from nearby

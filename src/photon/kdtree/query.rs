@@ -8,14 +8,16 @@ use super::{KdPoint, KdTree, Neighbor, CODE_DEGENERATE, LEAF_SIZE};
 /// `u32::MAX` items has fewer than 32 internal levels.
 const STACK_SIZE: usize = 64;
 
-/// A deferred far subtree: the slice `lo..hi`, its heap number and the squared distance from the
-/// query to its splitting plane (a lower bound on the metric for every item in it).
+/// A deferred far subtree: the slice `lo..hi`, its heap number, the query's distance from its
+/// cell along each axis (0 where the query lies within the cell's extent) and their squared sum
+/// `d2`, a lower bound on the metric for every item in it.
 #[derive(Clone, Copy, Default)]
 struct Frame {
     lo: u32,
     hi: u32,
     id: u32,
     d2: f32,
+    off: [f32; 3],
 }
 
 /// The photon-gather metric: `|d|² + (stretch - 1) (n·d)²` for the offset `d`, with the unit
@@ -104,9 +106,9 @@ impl<T: KdPoint> KdTree<T> {
     /// [`KdTree::knn`] with a custom squared metric `dist2(item - p)`; `max_radius²` bounds the
     /// metric and [`Neighbor::dist2`] holds metric values.
     ///
-    /// **Correctness requirement:** `dist2(d) ≥ d[a]²` for every axis `a` (true for any metric
-    /// `≥ |d|²`, such as [`flattened_metric`] with `stretch ≥ 1`); otherwise results may miss
-    /// items that a linear scan would find.
+    /// **Correctness requirement:** `dist2(d) ≥ |d|²` (as `Vec3::length_squared` computes it),
+    /// as [`flattened_metric`] with `stretch ≥ 1` is; otherwise results may miss items that a
+    /// linear scan would find.
     #[inline]
     pub fn knn_with<F: Fn(Vec3) -> f32>(
         &self,
@@ -263,7 +265,7 @@ impl<T: KdPoint> KdTree<T> {
     }
 
     /// [`KdTree::for_each_within`] with a custom squared metric of `item - p`; the same
-    /// requirement as for [`KdTree::knn_with`] applies (`dist2(d) ≥ d[a]²` on every axis).
+    /// requirement as for [`KdTree::knn_with`] applies (`dist2(d) ≥ |d|²`).
     #[inline]
     pub fn for_each_within_with<F: Fn(Vec3) -> f32, G: FnMut(u32, f32)>(
         &self,
@@ -321,6 +323,14 @@ impl<T: KdPoint> KdTree<T> {
     /// subtrees first; `visit` may shrink the limit (a k-NN heap that filled up), and subtrees
     /// the shrunk limit no longer reaches are skipped. The requirement of
     /// [`KdTree::knn_with`] on the metric applies.
+    ///
+    /// A subtree is skipped by the squared distance from `p` to its cell, the box its splitting
+    /// planes and the tree's bounds cut out, kept axis by axis as the walk crosses planes
+    /// (Arya and Mount's incremental distance): the distance to the last plane crossed alone
+    /// (pbrt-v2's and Jensen's test) knows nothing of the planes crossed before it, and a query
+    /// far from a dense cluster of items (the room outside a closed lamp, every photon inside
+    /// it) then visited almost the whole tree. The items visited, and in what order, are the
+    /// same either way: a skipped subtree holds none below the limit.
     #[inline(always)]
     fn descend<F: Fn(Vec3) -> f32, V: FnMut(usize, f32, &mut f32)>(
         &self,
@@ -336,6 +346,12 @@ impl<T: KdPoint> KdTree<T> {
         let mut stack = [Frame::default(); STACK_SIZE];
         let mut sp = 0usize;
         let (mut lo, mut hi, mut id) = (0usize, items.len(), 0usize);
+        // The query's distance from the current cell along each axis.
+        let outside = (self.bounds.min - p).max(p - self.bounds.max).max(Vec3::ZERO);
+        let mut off = outside.to_array();
+        if !(outside.length_squared() < limit) {
+            return;
+        }
         'walk: loop {
             let n = hi - lo;
             if n <= LEAF_SIZE {
@@ -361,17 +377,29 @@ impl<T: KdPoint> KdTree<T> {
                     if d2 < limit {
                         visit(mid, d2, &mut limit);
                     }
-                    let diff = p[code as usize] - s[code as usize];
-                    let plane2 = diff * diff;
+                    let a = code as usize;
+                    let diff = p[a] - s[a];
                     let (l, r) = (2 * id + 1, 2 * id + 2);
                     let (near, far) = if diff < 0.0 {
                         ((lo, mid, l), (mid + 1, hi, r))
                     } else {
                         ((mid + 1, hi, r), (lo, mid, l))
                     };
-                    if plane2 < limit {
-                        stack[sp] =
-                            Frame { lo: far.0 as u32, hi: far.1 as u32, id: far.2 as u32, d2: plane2 };
+                    // The far cell lies across the plane: along its axis the query is `|diff|`
+                    // from it; the near cell keeps the distances of the one it is cut from.
+                    // Summed afresh, in `length_squared`'s order: rounding is monotonic, so no
+                    // item of the cell has a smaller `|item - p|²` as the metric computes it.
+                    let mut far_off = off;
+                    far_off[a] = diff.abs();
+                    let far_rd = Vec3::from_array(far_off).length_squared();
+                    if far_rd < limit {
+                        stack[sp] = Frame {
+                            lo: far.0 as u32,
+                            hi: far.1 as u32,
+                            id: far.2 as u32,
+                            d2: far_rd,
+                            off: far_off,
+                        };
                         sp += 1;
                     }
                     (lo, hi, id) = near;
@@ -386,7 +414,7 @@ impl<T: KdPoint> KdTree<T> {
                 sp -= 1;
                 let f = stack[sp];
                 if f.d2 < limit {
-                    (lo, hi, id) = (f.lo as usize, f.hi as usize, f.id as usize);
+                    (lo, hi, id, off) = (f.lo as usize, f.hi as usize, f.id as usize, f.off);
                     continue 'walk;
                 }
             }
