@@ -332,3 +332,32 @@ fn a_guess_far_too_wide_still_finds_the_nearest() {
         );
     }
 }
+
+/// A query far from a dense cluster (the room about a closed lamp, every photon inside it)
+/// examines a few items, not the cluster: subtrees are skipped by the distance to their cell,
+/// not to their last splitting plane alone, which from far off lies nearer than every item
+/// (the query's offset along one axis is less than its distance). With the plane alone, a
+/// query of this test examined most of the 200 000 items.
+#[test]
+fn a_query_far_from_a_dense_cluster_examines_few_items() {
+    let mut rng = 0x2545_F491_4F6C_DD1Du64;
+    let mut unit = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 40) as f32 / (1u64 << 24) as f32
+    };
+    // A 5 cm cube of points at (0.3, 0.5, 0.3), queries about half a metre off on every side.
+    let pts: Vec<Vec3> =
+        (0..200_000).map(|_| Vec3::new(0.3, 0.5, 0.3) + 0.05 * Vec3::new(unit(), unit(), unit())).collect();
+    let tree = KdTree::build(pts);
+    let mut out = Vec::new();
+    let mut worst = 0;
+    for i in 0..200 {
+        let dir = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vec3::X);
+        let q = Vec3::new(0.325, 0.525, 0.325) + (0.3 + 0.01 * i as f32) * dir;
+        worst = worst.max(counted_knn(&tree, q, 8, &mut out));
+        assert_eq!(out.len(), 8);
+    }
+    assert!(worst <= 2_000, "an 8-NN query from afar examined {worst} of 200 000 items");
+}
