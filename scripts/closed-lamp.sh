@@ -12,10 +12,12 @@ bins=("$@")
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 cp scenes/pointlight/pointlight.obj scenes/pointlight/pointlight.mtl "$out/"
-python3 - "$out/pointlight.obj" <<'PY'
-import sys
+python3 - "$out/pointlight.obj" scenes/pointlight/pointlight.toml <<'PY'
+import sys, tomllib
 path = sys.argv[1]
-centre, h = (0.278, 0.5, 0.2796), 0.025  # the point light's position, the box's half width
+# The box, 5 cm wide, about the scene's point light.
+centre = tomllib.load(open(sys.argv[2], "rb"))["light"][0]["position"]
+h = 0.025
 n = sum(1 for line in open(path) if line.startswith("v "))
 corners = [(centre[0] + sx * h, centre[1] + sy * h, centre[2] + sz * h)
            for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
