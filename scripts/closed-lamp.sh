@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # A point light shut in a closed 5 cm box of zero-thickness walls, in the point-lit Cornell box
-# (as a light placed inside a closed lamp mesh would be): every photon stays in the box. Renders
-# it at the defaults with each binary given and prints the wall time and the stages' times; the
-# kd-tree's pruning is what this scene measures (docs/robustness.md).
+# (as a light placed inside a closed lamp mesh would be): every photon stays in the box, and the
+# image must be black. Renders it at the defaults with each binary given and prints the wall
+# time, the stages' times and the image's mean and RMSE against black: the kd-tree's pruning and
+# the leaks of thin walls are what this scene measures (docs/robustness.md).
 #
 #   bash scripts/closed-lamp.sh [BINARY...]      (default: target/release/photonmap)
 set -euo pipefail
@@ -33,10 +34,12 @@ PY
 cp scenes/pointlight/pointlight.toml "$out/closed-lamp.toml"
 for bin in "${bins[@]}"; do
     "$bin" render "$out/closed-lamp.toml" -q -o "$out/image.exr" --stats "$out/stats.json"
-    python3 - "$bin" "$out/stats.json" <<'PY'
+    "$bin" compare "$out/image.exr" --exact 0 --json > "$out/black.json"
+    python3 - "$bin" "$out/stats.json" "$out/black.json" <<'PY'
 import json, sys
 s = json.load(open(sys.argv[2]))
+b = json.load(open(sys.argv[3]))
 stages = ", ".join(f"{st['name']} {st['seconds']:.2f} s" for st in s["stages"] if st["ran"] and st["seconds"] >= 0.05)
-print(f"{sys.argv[1]}: {s['wall_seconds']:.1f} s ({stages})")
+print(f"{sys.argv[1]}: {s['wall_seconds']:.1f} s ({stages}); image mean {b['mean']:.2e}, RMSE {b['rmse']:.2e} against black")
 PY
 done

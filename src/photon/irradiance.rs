@@ -83,6 +83,19 @@ const CANDIDATES: usize = 8;
 /// Smallest cosine between a site's normal and the surface's.
 const NORMAL_COS: f32 = 0.9;
 
+/// Whether a site at `offset` from a query point lies on the query's surface (unit normal
+/// `ns`) as far as a lookup can tell: within 21° of its tangent plane (its height off the plane
+/// at most `1/√8` of its distance, the slope of the flattened disc of the gathers over the
+/// whole disc). A site whose normal agrees but which lies off the plane is on another surface
+/// facing the same way: a ceiling 2.4 cm above a closed lamp found the sites on the inside of
+/// the lamp's top, facing down as the ceiling does, and glowed with the lamp's inside light
+/// (`scripts/closed-lamp.sh`); so did a floor below a closed box.
+#[inline]
+fn on_plane(offset: Vec3, ns: Vec3) -> bool {
+    let h = offset.dot(ns);
+    8.0 * h * h <= offset.length_squared()
+}
+
 /// Irradiance at photon positions, for fast diffuse lookups: the sites, indexed, and their
 /// values as far as they have been estimated (read through [`Sites`]).
 #[derive(Debug, Default)]
@@ -204,10 +217,11 @@ enum Known {
 }
 
 impl Neighbourhood {
-    /// The nearest site `accept`ed (by its decoded normal) among the `k` nearest to `x` within
-    /// `max_radius` — what [`KdTree::nearest_among`] returns — if the sites held decide it.
+    /// The nearest site `accept`ed (by its decoded normal and its offset from `x`) among the
+    /// `k` nearest to `x` within `max_radius` — what [`KdTree::nearest_among`] returns — if the
+    /// sites held decide it.
     #[inline]
-    fn answer(&self, x: Vec3, k: usize, max_radius: f32, accept: impl Fn(Vec3) -> bool) -> Known {
+    fn answer(&self, x: Vec3, k: usize, max_radius: f32, accept: impl Fn(Vec3, Vec3) -> bool) -> Known {
         if self.radius <= 0.0 {
             return Known::Unknown;
         }
@@ -232,7 +246,7 @@ impl Neighbourhood {
             }
             let d2 = (s.pos - x).length_squared();
             if d2 < best.0 {
-                if accept(s.normal) {
+                if accept(s.normal, s.pos - x) {
                     best = (d2, Some(s.index));
                 } else {
                     rejected[n_rejected] = d2;
@@ -447,20 +461,20 @@ impl PrecomputedIrradiance {
     /// The site [`Sites::find_indirect`] finds.
     #[inline]
     fn indirect_site(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<u32> {
-        self.site(x, |n: Vec3| n.dot(ns).abs() >= NORMAL_COS, scratch)
+        self.site(x, |n: Vec3, offset: Vec3| n.dot(ns).abs() >= NORMAL_COS && on_plane(offset, ns), scratch)
     }
 
-    /// The nearest site whose (decoded) normal `accept` takes among the [`CANDIDATES`] nearest
+    /// The nearest site that `accept` takes (by its decoded normal and its offset from `x`) among the [`CANDIDATES`] nearest
     /// to `x` within the largest radius, from the neighbourhood held in `scratch` when it
     /// decides, else by a search (which then gathers the neighbourhood of the region
     /// expected).
     #[inline]
-    fn site(&self, x: Vec3, accept: impl Fn(Vec3) -> bool, scratch: &mut LookupScratch) -> Option<u32> {
+    fn site(&self, x: Vec3, accept: impl Fn(Vec3, Vec3) -> bool, scratch: &mut LookupScratch) -> Option<u32> {
         let parallel = accept;
         let index = match scratch.near.answer(x, CANDIDATES, self.max_radius, &parallel) {
             Known::Answer(index) => index,
             Known::Unknown => {
-                let accept = |s: &Site| parallel(s.normal());
+                let accept = |s: &Site| parallel(s.normal(), s.position() - x);
                 let (hint, rejected) = (scratch.last, &mut scratch.rejected);
                 let best = self.tree.nearest_among(x, CANDIDATES, self.max_radius, accept, hint, rejected);
                 // The sites of the region the query lies in, wide enough that the others in it
@@ -489,7 +503,7 @@ impl Sites<'_> {
     #[inline]
     pub fn find(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
         let tree = &self.cache.tree;
-        let matches = |s: &Site| s.normal().dot(ns) >= NORMAL_COS;
+        let matches = |s: &Site| s.normal().dot(ns) >= NORMAL_COS && on_plane(s.position() - x, ns);
         let (hint, rejected) = (scratch.last, &mut scratch.rejected);
         let best = tree.nearest_among(x, CANDIDATES, self.cache.max_radius, matches, hint, rejected);
         scratch.last = best.map(|b| b.index);
@@ -516,7 +530,9 @@ impl Sites<'_> {
     /// ([`LookupScratch::expect`]).
     #[inline]
     pub fn find_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
-        self.cache.site(x, |n: Vec3| n.dot(ns) >= NORMAL_COS, scratch).map(SiteRef)
+        self.cache
+            .site(x, |n: Vec3, offset: Vec3| n.dot(ns) >= NORMAL_COS && on_plane(offset, ns), scratch)
+            .map(SiteRef)
     }
 
     /// Site `s`'s values, unpacked by `unpack` with its block's scale (the block estimated
@@ -738,6 +754,47 @@ mod tests {
         }
     }
 
+    /// A lookup keeps to the query's own surface: a ceiling 2.4 cm above a lit square facing
+    /// it the same way (the inside of a closed lamp's top, facing down like the ceiling) finds
+    /// none of the square's sites, with a neighbourhood held or not, though they lie within the
+    /// largest radius and their normals agree; the square's own points find them.
+    #[test]
+    fn a_lookup_keeps_to_the_querys_own_surface() {
+        let hits: Vec<PhotonHit> = (0..100)
+            .flat_map(|i| {
+                (0..100).map(move |j| PhotonHit {
+                    pos: Vec3::new(i as f32 / 1000.0, 0.0, j as f32 / 1000.0),
+                    err: Vec3::ZERO,
+                    n: Vec3::NEG_Y,
+                    wi: Vec3::NEG_Y,
+                    power: Vec3::splat(1e-4),
+                })
+            })
+            .collect();
+        let sites = pick_sites(&[Hits::from(hits.clone())], 4);
+        let map = PhotonMap::build(hits, MapColor::Rgb, 10_000);
+        let params = GatherParams { k: 30, max_radius: 0.1, kernel: Kernel::Cone, flatten: 2.0 };
+        let maps = std::slice::from_ref(&map);
+        let cache = PrecomputedIrradiance::new(sites, params.max_radius, false);
+        let cache = cache.sites(source(maps, maps, &params, None));
+        for held in [false, true] {
+            let mut scratch = LookupScratch::default();
+            for x in
+                [Vec3::new(0.05, 0.024, 0.05), Vec3::new(0.12, 0.024, 0.03), Vec3::new(0.05, -0.024, 0.05)]
+            {
+                if held {
+                    scratch.expect(x, 0.01);
+                }
+                assert_eq!(cache.lookup_indirect(x, Vec3::NEG_Y, &mut scratch), None, "{x}, held {held}");
+                assert_eq!(cache.lookup_caustic(x, Vec3::NEG_Y, &mut scratch), None, "{x}, held {held}");
+                assert!(cache.lookup(x, Vec3::NEG_Y, &mut scratch).is_none(), "{x}, held {held}");
+            }
+            let on = Vec3::new(0.05, 0.0, 0.05);
+            assert!(cache.lookup_indirect(on, Vec3::NEG_Y, &mut scratch).is_some_and(|e| e.y > 0.0));
+            assert!(cache.lookup_caustic(on, Vec3::NEG_Y, &mut scratch).is_some());
+        }
+    }
+
     /// On a uniform density (Poisson photons on a plane) the lookups keep the mean of the
     /// gathers they replace, with sites independent of the map's photons (as the renderer
     /// traces them: `integrator::maps`). Sites at the map's own photons were off by the sum of
@@ -818,7 +875,7 @@ mod tests {
                         x[w] = offset[w];
                         let ns = if rng.gen_bool(0.2) { -normals[w] } else { normals[w] };
                         let before = kept.near.radius > 0.0
-                            && kept.near.answer(x, CANDIDATES, 0.05, |_| true) != Known::Unknown;
+                            && kept.near.answer(x, CANDIDATES, 0.05, |_, _| true) != Known::Unknown;
                         let got = cache.indirect_site(x, ns, &mut kept);
                         let want = cache.indirect_site(x, ns, &mut LookupScratch::default());
                         // The same site, or (far from the origin, where coordinates are coarse)

@@ -221,39 +221,79 @@ pub fn touching_boxes() -> Scene {
     b.build("touching", camera(Vec3::new(1.0, 5.0, 0.5), Vec3::new(1.0, 0.0, 0.5), Vec3::Z, fov))
 }
 
-/// Thickness of the walls of the closed boxes, and the gather radius their renders use: a wall
-/// must be thicker than the gather radius, or the estimate at an edge reaches photons behind
-/// the adjacent face.
+/// Thickness of the thick walls of the closed boxes, and the gather radius the boxes' renders
+/// use: wider than the thick walls, and than the whole thin boxes ([`Walls`]).
 pub const WALL: f32 = 0.25;
 pub const WALL_GATHER_RADIUS: f32 = 0.2;
 
-/// A closed box: the cavity `[-1, 1]³` inside walls [`WALL`] thick.
-fn hollow_box(b: &mut Builder, material: u32) {
-    b.cuboid(-Vec3::splat(1.0 + WALL), Vec3::splat(1.0 + WALL), Facing::Outward, material);
-    b.cuboid(-Vec3::ONE, Vec3::ONE, Facing::Inward, material);
+/// The walls of a closed box.
+#[derive(Clone, Copy, Debug)]
+pub enum Walls {
+    /// The cavity `[-1, 1]³` inside walls [`WALL`] thick.
+    Thick,
+    /// A box `[-0.05, 0.05]³` of walls of no thickness, both faces of each diffuse (a lamp's
+    /// shade modelled as one surface), the whole scene a twentieth the size: the gather
+    /// radius spans the box.
+    Thin,
 }
 
-/// A closed box floating above a floor, lit from outside by a point light; the camera is in its
-/// cavity.
-pub fn camera_inside_box() -> Scene {
+impl Walls {
+    /// The scene's scale: the thick box's positions are multiplied by it.
+    fn scale(self) -> f32 {
+        match self {
+            Walls::Thick => 1.0,
+            Walls::Thin => 0.05,
+        }
+    }
+}
+
+/// A closed box with `walls`, its cavity `[-k, k]³` (`k` the walls' scale).
+fn hollow_box(b: &mut Builder, material: u32, walls: Walls) {
+    let k = walls.scale();
+    if let Walls::Thick = walls {
+        b.cuboid(-Vec3::splat(1.0 + WALL), Vec3::splat(1.0 + WALL), Facing::Outward, material);
+    }
+    b.cuboid(-Vec3::splat(k), Vec3::splat(k), Facing::Inward, material);
+}
+
+/// A closed box with `walls` floating above a floor, lit from outside by a point light; the
+/// camera is in its cavity.
+pub fn camera_inside_box(walls: Walls) -> Scene {
     let mut b = Builder::default();
     let m = b.material("white", diffuse(0.7));
-    hollow_box(&mut b, m);
-    let f = 6.0;
-    let floor =
-        [Vec3::new(-f, -2.0, -f), Vec3::new(f, -2.0, -f), Vec3::new(f, -2.0, f), Vec3::new(-f, -2.0, f)];
+    hollow_box(&mut b, m, walls);
+    let k = walls.scale();
+    let (f, y) = (6.0 * k, -2.0 * k);
+    let floor = [Vec3::new(-f, y, -f), Vec3::new(f, y, -f), Vec3::new(f, y, f), Vec3::new(-f, y, f)];
     b.quad(floor, Vec3::Y, m);
-    b.light(LightDesc::Point { position: Vec3::new(0.5, 3.0, 0.3), intensity: Vec3::splat(20.0) });
-    b.build("camera-inside", camera(Vec3::new(0.2, 0.1, -0.3), Vec3::new(0.5, -0.3, 1.0), Vec3::Y, 90.0))
+    b.light(LightDesc::Point {
+        position: Vec3::new(0.5, 3.0, 0.3) * k,
+        intensity: Vec3::splat(20.0 * k * k),
+    });
+    let (eye, target) = (Vec3::new(0.2, 0.1, -0.3) * k, Vec3::new(0.5, -0.3, 1.0) * k);
+    b.build("camera-inside", camera(eye, target, Vec3::Y, 90.0))
 }
 
-/// A point light in the cavity of a closed box; the camera is outside, looking at a corner.
-pub fn light_inside_box() -> Scene {
+/// A point light in the cavity of a closed box with `walls`; the camera is outside, looking at
+/// a corner. The thin box stands above a floor (a lamp above a table), which the camera sees
+/// around it, 0.16 below the box: further than the indirect gathers' region reaches off the
+/// floor (`r / √2`, 0.14 at [`WALL_GATHER_RADIUS`]), so that the floor's gathers cannot reach
+/// the photons on the box's inside, but within reach of an irradiance lookup.
+pub fn light_inside_box(walls: Walls) -> Scene {
     let mut b = Builder::default();
     let m = b.material("white", diffuse(0.7));
-    hollow_box(&mut b, m);
-    b.light(LightDesc::Point { position: Vec3::new(0.1, 0.2, -0.1), intensity: Vec3::splat(5.0) });
-    b.build("light-inside", camera(Vec3::new(3.0, 2.5, -4.0), Vec3::ZERO, Vec3::Y, 40.0))
+    hollow_box(&mut b, m, walls);
+    let k = walls.scale();
+    if let Walls::Thin = walls {
+        let (f, y) = (6.0 * k, -k - 0.16);
+        let floor = [Vec3::new(-f, y, -f), Vec3::new(f, y, -f), Vec3::new(f, y, f), Vec3::new(-f, y, f)];
+        b.quad(floor, Vec3::Y, m);
+    }
+    b.light(LightDesc::Point {
+        position: Vec3::new(0.1, 0.2, -0.1) * k,
+        intensity: Vec3::splat(5.0 * k * k),
+    });
+    b.build("light-inside", camera(Vec3::new(3.0, 2.5, -4.0) * k, Vec3::ZERO, Vec3::Y, 40.0))
 }
 
 /// Radiance of the back-facing area light.
