@@ -712,23 +712,29 @@ mod tests {
         assert_eq!(lazy.estimated().0, lazy.len() as u64);
     }
 
+    /// A square of `side` in `y = 0` from the origin, lit on the side of `n` (±Y): 100 × 100
+    /// photons on a grid, 1e-4 W each, arriving along `n`.
+    fn lit_square(side: f32, n: Vec3) -> Vec<PhotonHit> {
+        (0..100)
+            .flat_map(|i| {
+                (0..100).map(move |j| PhotonHit {
+                    pos: Vec3::new(i as f32, 0.0, j as f32) * (side / 100.0),
+                    err: Vec3::ZERO,
+                    n,
+                    wi: n,
+                    power: Vec3::splat(1e-4),
+                })
+            })
+            .collect()
+    }
+
     /// Caustic sites: a lit floor reads its nearest site's value, the floor seen from below
     /// or a point farther than the largest radius from every site reads `None` (the caller
     /// gathers); with a neighbourhood held or not, the same answers.
     #[test]
     fn caustic_sites_answer_on_the_lit_side_only() {
         // A lit square of floor, 1e-4 W a photon at 1e4 photons per m^2: E = 1 W/m^2.
-        let hits: Vec<PhotonHit> = (0..100)
-            .flat_map(|i| {
-                (0..100).map(move |j| PhotonHit {
-                    pos: Vec3::new(i as f32 / 100.0, 0.0, j as f32 / 100.0),
-                    err: Vec3::ZERO,
-                    n: Vec3::Y,
-                    wi: Vec3::Y,
-                    power: Vec3::splat(1e-4),
-                })
-            })
-            .collect();
+        let hits = lit_square(1.0, Vec3::Y);
         // Sites between the photons (independent of them, as the renderer's are).
         let between = |h: &PhotonHit| PhotonHit { pos: h.pos + Vec3::new(0.005, 0.0, 0.005), ..*h };
         let sites = pick_sites(&[Hits::from(hits.iter().map(between).collect::<Vec<_>>())], 1);
@@ -760,17 +766,7 @@ mod tests {
     /// largest radius and their normals agree; the square's own points find them.
     #[test]
     fn a_lookup_keeps_to_the_querys_own_surface() {
-        let hits: Vec<PhotonHit> = (0..100)
-            .flat_map(|i| {
-                (0..100).map(move |j| PhotonHit {
-                    pos: Vec3::new(i as f32 / 1000.0, 0.0, j as f32 / 1000.0),
-                    err: Vec3::ZERO,
-                    n: Vec3::NEG_Y,
-                    wi: Vec3::NEG_Y,
-                    power: Vec3::splat(1e-4),
-                })
-            })
-            .collect();
+        let hits = lit_square(0.1, Vec3::NEG_Y);
         let sites = pick_sites(&[Hits::from(hits.clone())], 4);
         let map = PhotonMap::build(hits, MapColor::Rgb, 10_000);
         let params = GatherParams { k: 30, max_radius: 0.1, kernel: Kernel::Cone, flatten: 2.0 };
