@@ -83,17 +83,18 @@ const CANDIDATES: usize = 8;
 /// Smallest cosine between a site's normal and the surface's.
 const NORMAL_COS: f32 = 0.9;
 
-/// Whether a site at `offset` from a query point lies on the query's surface (unit normal
-/// `ns`) as far as a lookup can tell: within 21° of its tangent plane (its height off the plane
-/// at most `1/√8` of its distance, the slope of the flattened disc of the gathers over the
-/// whole disc). A site whose normal agrees but which lies off the plane is on another surface
-/// facing the same way: a ceiling 2.4 cm above a closed lamp found the sites on the inside of
-/// the lamp's top, facing down as the ceiling does, and glowed with the lamp's inside light
-/// (`scripts/closed-lamp.sh`); so did a floor below a closed box.
+/// Whether a site at `offset` from a query point, its normal at cosine `cos` to the query's
+/// (unit normal `ns`), lies on the query's surface as far as a lookup can tell: its normal
+/// within 25° ([`NORMAL_COS`]), and it within 21° of the query's tangent plane (its height off
+/// the plane at most `1/√8` of its distance, the slope of the flattened disc of the gathers over
+/// the whole disc). A site whose normal agrees but which lies off the plane is on another
+/// surface facing the same way: a ceiling 2.4 cm above a closed lamp found the sites on the
+/// inside of the lamp's top, facing down as the ceiling does, and glowed with the lamp's inside
+/// light (`scripts/closed-lamp.sh`); so did a floor below a closed box.
 #[inline]
-fn on_plane(offset: Vec3, ns: Vec3) -> bool {
+fn on_surface(cos: f32, offset: Vec3, ns: Vec3) -> bool {
     let h = offset.dot(ns);
-    8.0 * h * h <= offset.length_squared()
+    cos >= NORMAL_COS && 8.0 * h * h <= offset.length_squared()
 }
 
 /// Irradiance at photon positions, for fast diffuse lookups: the sites, indexed, and their
@@ -461,7 +462,7 @@ impl PrecomputedIrradiance {
     /// The site [`Sites::find_indirect`] finds.
     #[inline]
     fn indirect_site(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<u32> {
-        self.site(x, |n: Vec3, offset: Vec3| n.dot(ns).abs() >= NORMAL_COS && on_plane(offset, ns), scratch)
+        self.site(x, |n: Vec3, offset: Vec3| on_surface(n.dot(ns).abs(), offset, ns), scratch)
     }
 
     /// The nearest site that `accept` takes (by its decoded normal and its offset from `x`) among the [`CANDIDATES`] nearest
@@ -503,7 +504,7 @@ impl Sites<'_> {
     #[inline]
     pub fn find(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
         let tree = &self.cache.tree;
-        let matches = |s: &Site| s.normal().dot(ns) >= NORMAL_COS && on_plane(s.position() - x, ns);
+        let matches = |s: &Site| on_surface(s.normal().dot(ns), s.position() - x, ns);
         let (hint, rejected) = (scratch.last, &mut scratch.rejected);
         let best = tree.nearest_among(x, CANDIDATES, self.cache.max_radius, matches, hint, rejected);
         scratch.last = best.map(|b| b.index);
@@ -530,9 +531,7 @@ impl Sites<'_> {
     /// ([`LookupScratch::expect`]).
     #[inline]
     pub fn find_caustic(&self, x: Vec3, ns: Vec3, scratch: &mut LookupScratch) -> Option<SiteRef> {
-        self.cache
-            .site(x, |n: Vec3, offset: Vec3| n.dot(ns) >= NORMAL_COS && on_plane(offset, ns), scratch)
-            .map(SiteRef)
+        self.cache.site(x, |n: Vec3, offset: Vec3| on_surface(n.dot(ns), offset, ns), scratch).map(SiteRef)
     }
 
     /// Site `s`'s values, unpacked by `unpack` with its block's scale (the block estimated

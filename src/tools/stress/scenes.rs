@@ -247,6 +247,16 @@ impl Walls {
     }
 }
 
+/// A floor facing up: the square `[-half, half]²` at height `y`.
+fn floor(b: &mut Builder, half: f32, y: f32, material: u32) {
+    let f = half;
+    b.quad(
+        [Vec3::new(-f, y, -f), Vec3::new(f, y, -f), Vec3::new(f, y, f), Vec3::new(-f, y, f)],
+        Vec3::Y,
+        material,
+    );
+}
+
 /// A closed box with `walls`, its cavity `[-k, k]³` (`k` the walls' scale).
 fn hollow_box(b: &mut Builder, material: u32, walls: Walls) {
     let k = walls.scale();
@@ -263,9 +273,7 @@ pub fn camera_inside_box(walls: Walls) -> Scene {
     let m = b.material("white", diffuse(0.7));
     hollow_box(&mut b, m, walls);
     let k = walls.scale();
-    let (f, y) = (6.0 * k, -2.0 * k);
-    let floor = [Vec3::new(-f, y, -f), Vec3::new(f, y, -f), Vec3::new(f, y, f), Vec3::new(-f, y, f)];
-    b.quad(floor, Vec3::Y, m);
+    floor(&mut b, 6.0 * k, -2.0 * k, m);
     b.light(LightDesc::Point {
         position: Vec3::new(0.5, 3.0, 0.3) * k,
         intensity: Vec3::splat(20.0 * k * k),
@@ -285,9 +293,7 @@ pub fn light_inside_box(walls: Walls) -> Scene {
     hollow_box(&mut b, m, walls);
     let k = walls.scale();
     if let Walls::Thin = walls {
-        let (f, y) = (6.0 * k, -k - 0.16);
-        let floor = [Vec3::new(-f, y, -f), Vec3::new(f, y, -f), Vec3::new(f, y, f), Vec3::new(-f, y, f)];
-        b.quad(floor, Vec3::Y, m);
+        floor(&mut b, 6.0 * k, -k - 0.16, m);
     }
     b.light(LightDesc::Point {
         position: Vec3::new(0.1, 0.2, -0.1) * k,
