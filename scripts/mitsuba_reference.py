@@ -29,7 +29,11 @@ or refused):
     [[mesh]]  -> scale, rotate, translate or matrix applied to the vertices here as
                  src/scene/transform.rs does (T R_n .. R_1 S, or M), the winding reversed where
                  the determinant is negative
-    glossy, spot, anything else -> error (no approximation)
+    glossy    -> our normalised Phong itself (src/material/glossy.rs: kd / pi + ks (ns + 2) /
+                 (2 pi) cos^ns of the angle to the mirror direction, two-sided, the same
+                 lobe sampling), written here as a Mitsuba BSDF plugin in Python: the reference
+                 checks our light transport on glossy surfaces, not the choice of the lobe
+    spot, anything else -> error (no approximation)
 
 Transport: `path`, max_depth -1, rr_depth 5, hide_emitters false, independent sampler.
 
@@ -208,8 +212,11 @@ def resolve_material(name, mtl, entry):
     if kind == "glass":
         m["ior"] = entry.get("ior", mtl.get("ni", 1.5))
     if kind == "glossy":
-        raise Refused(f"material {name}: glossy (normalised Phong) has no exact Mitsuba 3 counterpart")
-    if kind not in ("diffuse", "emissive", "mirror", "glass"):
+        m["ks"] = pick("ks", [0.0, 0.0, 0.0])
+        m["ns"] = float(pick("ns", 1.0))
+        if "kd_texture" in m or "ks_texture" in entry or "ks_texture" in mtl:
+            raise Refused(f"material {name}: textured glossy materials are not drawn here")
+    if kind not in ("diffuse", "emissive", "mirror", "glass", "glossy"):
         raise Refused(f"material {name}: unknown type {kind!r}")
     return m
 
@@ -326,7 +333,87 @@ def bsdf_dict(m):
         return {"type": "conductor", "material": "none", "specular_reflectance": rgb(m["ks"])}
     if m["type"] == "glass":
         return {"type": "dielectric", "int_ior": float(m["ior"]), "ext_ior": 1.0}
+    if m["type"] == "glossy":
+        d = {"type": "ours_phong", "ns": float(m["ns"])}
+        for key in ("kd", "ks"):
+            for c, v in zip("rgb", m[key]):
+                d[f"{key}_{c}"] = float(v)
+        return d
     raise Refused(m["type"])
+
+
+def register_phong(mi, dr):
+    """Registers `ours_phong`: src/material/glossy.rs's normalised Phong (Lafortune & Willems
+    1994) as a Mitsuba BSDF, two-sided (both directions mirrored to the side the viewer is on,
+    as ours flips the normal), the lobe picked with probability mean(ks) / (mean(kd) +
+    mean(ks)) and sampled around the mirror direction with density (ns + 1) / (2 pi) cos^ns,
+    samples below the surface rejected; `eval` is f cos, `pdf` the mixture's, as ours."""
+    glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+    diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+
+    class OursPhong(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            kd = [max(props[f"kd_{c}"], 0.0) for c in "rgb"]
+            ks = [max(props[f"ks_{c}"], 0.0) for c in "rgb"]
+            self.kd, self.ks, self.ns = mi.Color3f(*kd), mi.Color3f(*ks), float(props["ns"])
+            self.ps = sum(ks) / (sum(kd) + sum(ks)) if sum(kd) + sum(ks) > 0 else 0.0
+            self.m_components = [glossy, diffuse]
+            self.m_flags = glossy | diffuse
+
+        def side(self, si):
+            return dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)
+
+        def f_pdf(self, wi, wo):
+            """f and the mixture's density for local directions on the upper side (wi: toward
+            the viewer, wo: toward the light)."""
+            mirror = mi.Vector3f(-wi.x, -wi.y, wi.z)
+            lobe = dr.power(dr.maximum(dr.dot(mirror, wo), 0.0), self.ns)
+            f = self.kd * dr.inv_pi + self.ks * ((self.ns + 2.0) * 0.5 * dr.inv_pi * lobe)
+            pdf = (1.0 - self.ps) * wo.z * dr.inv_pi + self.ps * (self.ns + 1.0) * 0.5 * dr.inv_pi * lobe
+            valid = (wi.z > 0) & (wo.z > 0)
+            return f, dr.select(valid, pdf, 0.0), valid
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            s = self.side(si)
+            wi, wo = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s), mi.Vector3f(wo.x, wo.y, wo.z * s)
+            f, pdf, valid = self.f_pdf(wi, wo)
+            ok = active & valid
+            return dr.select(ok, f * wo.z, 0.0), dr.select(ok, pdf, 0.0)
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.eval_pdf(ctx, si, wo, active)[0]
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.eval_pdf(ctx, si, wo, active)[1]
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            s = self.side(si)
+            wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s)
+            lobe = sample1 < self.ps
+            cos_a = dr.power(sample2.x, 1.0 / (self.ns + 1.0))
+            sin_a = dr.safe_sqrt(1.0 - cos_a * cos_a)
+            sp, cp = dr.sincos(dr.two_pi * sample2.y)
+            around = mi.Frame3f(mi.Vector3f(-wi.x, -wi.y, wi.z)).to_world(mi.Vector3f(sin_a * cp, sin_a * sp, cos_a))
+            wo = dr.select(lobe, around, mi.warp.square_to_cosine_hemisphere(sample2))
+            f, pdf, valid = self.f_pdf(wi, wo)
+            bs = mi.BSDFSample3f()
+            bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * s)
+            bs.pdf = pdf
+            bs.eta = 1.0
+            bs.sampled_type = dr.select(lobe, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                                        mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+            bs.sampled_component = dr.select(lobe, mi.UInt32(0), mi.UInt32(1))
+            ok = active & valid & (pdf > 0)
+            return bs, dr.select(ok, f * wo.z / pdf, 0.0)
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return f"OursPhong[ns={self.ns}, ps={self.ps}]"
+
+    mi.register_bsdf("ours_phong", lambda props: OursPhong(props))
 
 
 def sensor_dict(mi, camera, eye, target, up, spp):
@@ -513,6 +600,7 @@ def main():
     import mitsuba as mi
 
     mi.set_variant(args.variant)
+    register_phong(mi, dr)
     if args.variant.startswith("llvm"):
         dr.set_thread_count(args.threads)
     try:

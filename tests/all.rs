@@ -18,6 +18,7 @@ mod commands;
 mod emission;
 mod environment;
 mod fuzz_inputs;
+mod glossy;
 mod gltf;
 mod golden;
 mod guide;

@@ -57,6 +57,10 @@ pub const INDIRECT_EVERY: u32 = 4;
 /// rounding.
 pub const INDIRECT_AT_LEAST: u32 = 4;
 
+/// Glossy bounces a camera path traces ([`Shading::shade`]) before the photon maps estimate the
+/// glossy lobe's light instead, as they do the diffuse part's at every bounce.
+pub const GLOSSY_DEPTH: u32 = 3;
+
 /// Camera samples of a pass of `spp` that read the indirect estimate ([`INDIRECT_EVERY`]).
 pub fn indirect_samples(spp: u32) -> u32 {
     spp.div_ceil(INDIRECT_EVERY).max(spp.min(INDIRECT_AT_LEAST))
@@ -391,15 +395,30 @@ impl<A: Accel> Shading<'_, '_, A> {
         });
         if let Some(v) = landing {
             let later = Some((sample, v.beta));
-            l += v.beta * self.shade(&v.hit, v.wo, &v.m, indirect, later, rng, scratch, c);
+            let only = self.cfg.component;
+            l += v.beta * self.shade(&v.hit, v.wo, &v.m, indirect, later, only, 0, rng, scratch, c);
         }
         l
     }
 
-    /// Reflected radiance toward `wo` at a diffuse or glossy surface, the indirect estimate
-    /// weighted `weight` (0: not read; final gathering ignores it). `later`: the camera sample
-    /// and the path's throughput to this point, for light samples whose shadow rays are put off
-    /// into `scratch.shadows` (left out of the result); `None`: cast at once.
+    /// Reflected radiance toward `wo` at a diffuse or glossy surface, the terms `only` names, the
+    /// indirect estimate weighted `weight` (0: not read; final gathering ignores it). `later`:
+    /// the camera sample and the path's throughput to this point, for light samples whose
+    /// shadow rays are put off into `scratch.shadows` (left out of the result); `None`: cast at
+    /// once.
+    ///
+    /// On a sharp glossy surface (Phong exponent above the gathers' photon count `k`) reached
+    /// after fewer than [`GLOSSY_DEPTH`] glossy bounces, the photon maps estimate the Lambertian
+    /// part's light alone and the Phong lobe's is traced ([`Shading::glossy_lobe`]), as Jensen
+    /// (2001, §9.1) splits the rendering equation. A density estimate weighs each of its `k`
+    /// photons by the lobe, and about `1.39 / ns` of light arriving evenly falls within the
+    /// lobe's half-maximum cone (half-angle `√(2 ln 2 / ns)`): above `ns = k` that is under
+    /// about one photon, and the estimate is a few specks (a sharp metal sphere reflected each
+    /// photon near its mirror direction as a bright blotch), where a sampled ray sees what the
+    /// lobe sees. Wider lobes hold several photons and are estimated from them, as are all
+    /// lobes deeper: a traced ray that lands on a wide lobe seeing a sharp one's highlight
+    /// (a rough metal beside a chrome ball) is a rare bright sample, which the photons
+    /// reflected by the sharp lobe bring as a smooth estimate.
     #[allow(clippy::too_many_arguments)]
     fn shade(
         &self,
@@ -408,11 +427,12 @@ impl<A: Accel> Shading<'_, '_, A> {
         m: &Material,
         weight: f32,
         later: Option<(u32, Vec3)>,
+        only: Component,
+        depth: u32,
         rng: &mut Pcg32,
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Vec3 {
-        let only = self.cfg.component;
         let mut l = Vec3::ZERO;
         if only.shows(Component::Direct) {
             let mut shadow = match later {
@@ -421,6 +441,20 @@ impl<A: Accel> Shading<'_, '_, A> {
             };
             l += direct_light_with(self.frame, hit, wo, m, self.cfg.light_samples, &mut shadow, rng, c);
         }
+        let traced = self.cfg.indirect == IndirectMode::Estimate && depth < GLOSSY_DEPTH;
+        let lobes = if traced { m.glossy_lobes(self.cfg.gathers.gather_photons as f32) } else { None };
+        if let Some((_, lobe)) = lobes {
+            if only.shows(Component::Indirect) {
+                l += self.glossy_lobe(hit, wo, &lobe, weight, later, depth, rng, scratch, c);
+            }
+        }
+        // What the maps estimate: the Lambertian part alone where the lobe is traced (nothing
+        // for a metal).
+        let diffuse_part = lobes.map(|(kd, _)| Material::Diffuse { kd });
+        if diffuse_part.is_some_and(|d| d.albedo() == Vec3::ZERO) {
+            return l;
+        }
+        let m = diffuse_part.as_ref().unwrap_or(m);
         if !self.maps.caustic.is_empty() && only.shows(Component::Caustic) {
             l += match self.precomputed_caustic(hit, wo, m, scratch, c) {
                 Some(e) => e,
@@ -444,6 +478,48 @@ impl<A: Accel> Shading<'_, '_, A> {
                 }
                 IndirectMode::FinalGather => l += self.final_gather(hit, wo, m, rng, scratch, c),
             }
+        }
+        l
+    }
+
+    /// The light a glossy surface's Phong lobe `lobe` reflects toward `wo` at `hit` but for its
+    /// direct light (light samples and BSDF samples take that): one ray sampled from the lobe,
+    /// through any mirrors and glass, and the radiance leaving the surface it lands on, shaded
+    /// as the camera's first surface is ([`Shading::shade`], one glossy bounce deeper; every
+    /// term). Emitters and the sky are counted only past a mirror or glass (seen along the ray
+    /// itself they are direct light). `later` as for `shade`, the lobe's throughput carried.
+    #[allow(clippy::too_many_arguments)]
+    fn glossy_lobe(
+        &self,
+        hit: &SurfaceHit,
+        wo: Vec3,
+        lobe: &Material,
+        weight: f32,
+        later: Option<(u32, Vec3)>,
+        depth: u32,
+        rng: &mut Pcg32,
+        scratch: &mut Scratch,
+        c: &mut Counters,
+    ) -> Vec3 {
+        let Some(s) =
+            hit.normals().sample(lobe, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)
+        else {
+            return Vec3::ZERO;
+        };
+        let start = Start::Ray(Ray::new(hit.spawn(s.sample.wi), s.sample.wi));
+        let count = |c: &mut Counters| c.rays.specular += 1;
+        let mut l = Vec3::ZERO;
+        let mut first = true;
+        let landing = walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |seen, beta| {
+            if !first {
+                l += beta * seen.emitted(self.frame.lights);
+            }
+            first = false;
+        });
+        if let Some(v) = landing {
+            let later = later.map(|(sample, beta)| (sample, beta * v.beta));
+            l += v.beta
+                * self.shade(&v.hit, v.wo, &v.m, weight, later, Component::All, depth + 1, rng, scratch, c);
         }
         l
     }

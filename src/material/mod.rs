@@ -157,6 +157,20 @@ impl Material {
         }
     }
 
+    /// A glossy material's two lobes apart, where its Phong exponent is above `min_ns`: the
+    /// Lambertian part's albedo `kd` and the Phong lobe alone (`kd` zero, which
+    /// [`Material::sample`] then always picks); `None` for any other kind, a glossy one without
+    /// a lobe (`ks` zero) or a wider one.
+    #[inline]
+    pub fn glossy_lobes(&self, min_ns: f32) -> Option<(Vec3, Material)> {
+        match *self {
+            Material::Glossy { kd, ks, ns } if ks.max_element() > 0.0 && ns > min_ns => {
+                Some((kd, Material::Glossy { kd: Vec3::ZERO, ks, ns }))
+            }
+            _ => None,
+        }
+    }
+
     /// Whether the surface has a non-delta (diffuse or glossy) component, i.e. stores photons and
     /// gathers light.
     pub fn is_diffuse_like(&self) -> bool {
