@@ -1,11 +1,16 @@
 //! The walk through mirrors and glass that camera rays and final-gather rays take: from a ray
 //! (or a primary ray's known hit), specular bounces are sampled until the first diffuse or
-//! glossy surface, which is where photon maps, shadow rays and gathers take over.
+//! glossy surface, which is where photon maps, shadow rays and gathers take over; and the ray
+//! a camera path sends on through a sharp glossy lobe ([`through_lobe`]).
 
 use super::{Counters, Frame, SurfaceHit};
 use crate::accel::{Accel, Hit};
 use crate::geometry::Ray;
 use crate::material::{Material, TransportMode};
+
+/// Sharp glossy lobes ([`Material::sharp_lobe`]) a camera path traces before the photon maps
+/// estimate a lobe's light instead, as they do a diffuse surface's.
+pub const GLOSSY_DEPTH: u32 = 3;
 use glam::Vec3;
 use rand::Rng;
 use rand_pcg::Pcg32;
@@ -100,4 +105,31 @@ pub fn walk<'s, A: Accel>(
         ray = Ray::new(hit.spawn(s.sample.wi), s.sample.wi);
     }
     None
+}
+
+/// The ray a camera path sends on from the landing `v` through its sharp glossy lobe `lobe`
+/// (one direction sampled from the lobe alone, its throughput times `scale`), walked through
+/// any mirrors and glass: `visit` sees every surface reached, the sky if it leaves the scene,
+/// and whether the ray itself reached it (`true`: straight along the lobe's direction, where
+/// emitters are the direct light the landing's light samples and BSDF samples take). Returns
+/// the next landing, `None` as [`walk`] does.
+#[allow(clippy::too_many_arguments)]
+pub fn through_lobe<'s, A: Accel>(
+    frame: &Frame<'s, A>,
+    v: &Landing,
+    lobe: &Material,
+    scale: f32,
+    max_depth: u32,
+    rng: &mut Pcg32,
+    c: &mut Counters,
+    count: fn(&mut Counters),
+    mut visit: impl FnMut(Seen, Vec3, bool),
+) -> Option<Landing> {
+    let s = v.hit.normals().sample(lobe, v.wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)?;
+    let start = Start::Ray(Ray::new(v.hit.spawn(s.sample.wi), s.sample.wi));
+    let mut first = true;
+    walk(frame, start, v.beta * s.weight * scale, max_depth, rng, c, count, |seen, beta| {
+        visit(seen, beta, first);
+        first = false;
+    })
 }

@@ -13,7 +13,7 @@ use crate::accel::Accel;
 use crate::config::{Component, IndirectMode, PhotonConfig};
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::{direct_light, direct_light_with, ShadowRays, Shadows};
-use crate::frame::specular::{walk, Landing, Start};
+use crate::frame::specular::{through_lobe, walk, Landing, Start, GLOSSY_DEPTH};
 use crate::frame::{Counters, Frame, Part, Progress, SurfaceHit};
 use crate::geometry::Ray;
 use crate::material::{face_forward, Material, TransportMode};
@@ -56,10 +56,6 @@ pub const INDIRECT_EVERY: u32 = 4;
 /// at few samples a pixel, its readings are what average out the estimate's blotches and
 /// rounding.
 pub const INDIRECT_AT_LEAST: u32 = 4;
-
-/// Glossy bounces a camera path traces ([`Shading::shade`]) before the photon maps estimate the
-/// glossy lobe's light instead, as they do the diffuse part's at every bounce.
-pub const GLOSSY_DEPTH: u32 = 3;
 
 /// Camera samples of a pass of `spp` that read the indirect estimate ([`INDIRECT_EVERY`]).
 pub fn indirect_samples(spp: u32) -> u32 {
@@ -407,18 +403,16 @@ impl<A: Accel> Shading<'_, '_, A> {
     /// shadow rays are put off into `scratch.shadows` (left out of the result); `None`: cast at
     /// once.
     ///
-    /// On a sharp glossy surface (Phong exponent above the gathers' photon count `k`) reached
-    /// after fewer than [`GLOSSY_DEPTH`] glossy bounces, the photon maps estimate the Lambertian
-    /// part's light alone and the Phong lobe's is traced ([`Shading::glossy_lobe`]), as Jensen
-    /// (2001, §9.1) splits the rendering equation. A density estimate weighs each of its `k`
-    /// photons by the lobe, and about `1.39 / ns` of light arriving evenly falls within the
-    /// lobe's half-maximum cone (half-angle `√(2 ln 2 / ns)`): above `ns = k` that is under
-    /// about one photon, and the estimate is a few specks (a sharp metal sphere reflected each
-    /// photon near its mirror direction as a bright blotch), where a sampled ray sees what the
-    /// lobe sees. Wider lobes hold several photons and are estimated from them, as are all
-    /// lobes deeper: a traced ray that lands on a wide lobe seeing a sharp one's highlight
-    /// (a rough metal beside a chrome ball) is a rare bright sample, which the photons
-    /// reflected by the sharp lobe bring as a smooth estimate.
+    /// On a sharp glossy surface ([`Material::sharp_lobe`]) reached after fewer than
+    /// [`GLOSSY_DEPTH`] such bounces, the photon maps estimate the Lambertian part's light
+    /// alone and the Phong lobe's is traced ([`Shading::glossy_lobe`]), as Jensen (2001, §9.1)
+    /// splits the rendering equation: estimated from the photons, a lobe holding less than
+    /// about one of them is a few specks (a sharp metal sphere reflected each photon near its
+    /// mirror direction as a bright blotch), where a sampled ray sees what the lobe sees.
+    /// Wider lobes hold several photons and are estimated from them, as are all lobes deeper:
+    /// a traced ray that lands on a wide lobe seeing a sharp one's highlight (a rough metal
+    /// beside a chrome ball) is a rare bright sample, which the photons reflected by the sharp
+    /// lobe bring as a smooth estimate.
     #[allow(clippy::too_many_arguments)]
     fn shade(
         &self,
@@ -442,10 +436,10 @@ impl<A: Accel> Shading<'_, '_, A> {
             l += direct_light_with(self.frame, hit, wo, m, self.cfg.light_samples, &mut shadow, rng, c);
         }
         let traced = self.cfg.indirect == IndirectMode::Estimate && depth < GLOSSY_DEPTH;
-        let lobes = if traced { m.glossy_lobes(self.cfg.gathers.gather_photons as f32) } else { None };
+        let lobes = if traced { m.sharp_lobe() } else { None };
         if let Some((_, lobe)) = lobes {
             if only.shows(Component::Indirect) {
-                l += self.glossy_lobe(hit, wo, &lobe, weight, later, depth, rng, scratch, c);
+                l += self.glossy_lobe(hit, wo, m, &lobe, weight, later, depth, rng, scratch, c);
             }
         }
         // What the maps estimate: the Lambertian part alone where the lobe is traced (nothing
@@ -482,17 +476,18 @@ impl<A: Accel> Shading<'_, '_, A> {
         l
     }
 
-    /// The light a glossy surface's Phong lobe `lobe` reflects toward `wo` at `hit` but for its
-    /// direct light (light samples and BSDF samples take that): one ray sampled from the lobe,
-    /// through any mirrors and glass, and the radiance leaving the surface it lands on, shaded
-    /// as the camera's first surface is ([`Shading::shade`], one glossy bounce deeper; every
-    /// term). Emitters and the sky are counted only past a mirror or glass (seen along the ray
-    /// itself they are direct light). `later` as for `shade`, the lobe's throughput carried.
+    /// The light a glossy surface's Phong lobe `lobe` reflects toward `wo` at `hit` (material
+    /// `m`) but for its direct light (light samples and BSDF samples take that): one ray
+    /// through the lobe ([`through_lobe`]) and the radiance leaving the surface it lands on,
+    /// shaded as the camera's first surface is ([`Shading::shade`], one glossy bounce deeper;
+    /// every term); emitters and the sky count only past a mirror or glass. `later` as for
+    /// `shade`, the lobe's throughput carried.
     #[allow(clippy::too_many_arguments)]
     fn glossy_lobe(
         &self,
         hit: &SurfaceHit,
         wo: Vec3,
+        m: &Material,
         lobe: &Material,
         weight: f32,
         later: Option<(u32, Vec3)>,
@@ -501,21 +496,25 @@ impl<A: Accel> Shading<'_, '_, A> {
         scratch: &mut Scratch,
         c: &mut Counters,
     ) -> Vec3 {
-        let Some(s) =
-            hit.normals().sample(lobe, wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)
-        else {
-            return Vec3::ZERO;
-        };
-        let start = Start::Ray(Ray::new(hit.spawn(s.sample.wi), s.sample.wi));
+        let here = Landing { hit: *hit, wo, m: *m, beta: Vec3::ONE };
         let count = |c: &mut Counters| c.rays.specular += 1;
         let mut l = Vec3::ZERO;
-        let mut first = true;
-        let landing = walk(self.frame, start, s.weight, self.cfg.max_depth, rng, c, count, |seen, beta| {
-            if !first {
-                l += beta * seen.emitted(self.frame.lights);
-            }
-            first = false;
-        });
+        let lights = self.frame.lights;
+        let landing = through_lobe(
+            self.frame,
+            &here,
+            lobe,
+            1.0,
+            self.cfg.max_depth,
+            rng,
+            c,
+            count,
+            |seen, beta, first| {
+                if !first {
+                    l += beta * seen.emitted(lights);
+                }
+            },
+        );
         if let Some(v) = landing {
             let later = later.map(|(sample, beta)| (sample, beta * v.beta));
             l += v.beta

@@ -40,16 +40,17 @@ use crate::config::ProgressiveConfig;
 use crate::film::Film;
 use crate::frame::camera::{for_each_pixel, CameraBatch, SampleMean};
 use crate::frame::direct::direct_light;
-use crate::frame::specular::{walk, Landing, Start};
+use crate::frame::specular::{through_lobe, walk, Landing, Start, GLOSSY_DEPTH};
 use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::Ray;
-use crate::material::face_forward;
+use crate::material::{face_forward, Material};
 use crate::photon::footprint::{Footprint, CLEAR};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
 use crate::stats::Stats;
 use glam::Vec3;
+use rand::Rng;
 use rand_pcg::Pcg32;
 
 /// A pixel's progressive statistics (the emission and direct light, averaged over passes like
@@ -238,7 +239,9 @@ pub(super) fn camera_noise<A: Accel>(
 }
 
 /// Follows a camera sample through mirrors and glass: the emission seen and the direct light
-/// at the first diffuse or glossy surface.
+/// at the first diffuse or glossy surface, and past a sharp glossy lobe there (up to
+/// [`GLOSSY_DEPTH`] of them, as the visible point goes: [`visible_point`]) the direct light of
+/// the surface the lobe sees and the emitters it sees past mirrors and glass.
 fn trace_camera<A: Accel>(
     frame: &Frame<'_, A>,
     cfg: &ProgressiveConfig,
@@ -250,17 +253,28 @@ fn trace_camera<A: Accel>(
     let mut l = Vec3::ZERO;
     let count = |c: &mut Counters| c.rays.specular += 1;
     let start = Start::Traced(ray, first);
-    let landing = walk(frame, start, Vec3::ONE, cfg.max_depth, rng, c, count, |seen, beta| {
+    let mut landing = walk(frame, start, Vec3::ONE, cfg.max_depth, rng, c, count, |seen, beta| {
         l += beta * seen.emitted(frame.lights)
     });
-    if let Some(v) = &landing {
+    for depth in 0..=GLOSSY_DEPTH {
+        let Some(v) = &landing else { break };
         l += v.beta * direct_light(frame, &v.hit, v.wo, &v.m, cfg.light_samples, rng, c);
+        let Some((_, lobe)) = v.m.sharp_lobe().filter(|_| depth < GLOSSY_DEPTH) else { break };
+        landing = through_lobe(frame, v, &lobe, 1.0, cfg.max_depth, rng, c, count, |seen, beta, first| {
+            if !first {
+                l += beta * seen.emitted(frame.lights);
+            }
+        });
     }
     l
 }
 
 /// The pixel's visible point of `pass`: the first diffuse or glossy surface along the pass's
-/// visible-point ray ([`Frame::visible_point_ray`]), through mirrors and glass.
+/// visible-point ray ([`Frame::visible_point_ray`]), through mirrors and glass. On a sharp
+/// glossy lobe ([`Material::sharp_lobe`], whose light the photons estimate as a few specks)
+/// it is, by the probability the BSDF picks each part, the Lambertian part's point there or a
+/// point past the lobe, its throughput over that probability (up to [`GLOSSY_DEPTH`] lobes;
+/// [`trace_camera`] takes the direct light past them).
 pub(super) fn visible_point<'s, A: Accel>(
     frame: &Frame<'s, A>,
     cfg: &ProgressiveConfig,
@@ -274,7 +288,16 @@ pub(super) fn visible_point<'s, A: Accel>(
     c.rays.camera += 1;
     let hit = c.timed(Part::Rays, || frame.accel.intersect(&ray));
     let count = |c: &mut Counters| c.rays.specular += 1;
-    walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _| {})
+    let mut v = walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _| {})?;
+    for _ in 0..GLOSSY_DEPTH {
+        let Some((kd, lobe)) = v.m.sharp_lobe() else { break };
+        let q = v.m.diffuse_share();
+        if rng.gen::<f32>() < q {
+            return Some(Landing { m: Material::Diffuse { kd }, beta: v.beta / q, ..v });
+        }
+        v = through_lobe(frame, &v, &lobe, 1.0 / (1.0 - q), cfg.max_depth, rng, c, count, |_, _, _| {})?;
+    }
+    Some(v)
 }
 
 /// The photons of this pass around the visible point: the progressive update of `st`. The

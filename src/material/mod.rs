@@ -32,6 +32,13 @@ pub use shading::{Normals, Scattered};
 
 use glam::Vec3;
 
+/// The Phong exponent above which a glossy lobe is sharp: camera paths trace it
+/// ([`crate::frame::specular::through_lobe`]) instead of estimating its light from photons.
+/// A density estimate weighs its `k` photons by the lobe, and light arriving evenly puts about
+/// `1.39 / ns` of them inside the lobe's half-maximum cone (half-angle `√(2 ln 2 / ns)`): above
+/// `ns = k`, the two-pass gathers' default of 100, less than about one photon.
+pub const SHARP_NS: f32 = 100.0;
+
 /// What a surface does with light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
@@ -157,17 +164,27 @@ impl Material {
         }
     }
 
-    /// A glossy material's two lobes apart, where its Phong exponent is above `min_ns`: the
-    /// Lambertian part's albedo `kd` and the Phong lobe alone (`kd` zero, which
-    /// [`Material::sample`] then always picks); `None` for any other kind, a glossy one without
-    /// a lobe (`ks` zero) or a wider one.
+    /// A glossy material's two lobes apart, where its Phong lobe is sharp (`ns` above
+    /// [`SHARP_NS`]): the Lambertian part's albedo `kd` and the Phong lobe alone (`kd` zero,
+    /// which [`Material::sample`] then always picks); `None` for any other kind, a glossy one
+    /// without a lobe (`ks` zero) or a wider one.
     #[inline]
-    pub fn glossy_lobes(&self, min_ns: f32) -> Option<(Vec3, Material)> {
+    pub fn sharp_lobe(&self) -> Option<(Vec3, Material)> {
         match *self {
-            Material::Glossy { kd, ks, ns } if ks.max_element() > 0.0 && ns > min_ns => {
+            Material::Glossy { kd, ks, ns } if ks.max_element() > 0.0 && ns > SHARP_NS => {
                 Some((kd, Material::Glossy { kd: Vec3::ZERO, ks, ns }))
             }
             _ => None,
+        }
+    }
+
+    /// The probability that [`Material::sample`] picks a glossy material's Lambertian part
+    /// (one for any other kind).
+    #[inline]
+    pub fn diffuse_share(&self) -> f32 {
+        match *self {
+            Material::Glossy { kd, ks, ns } => 1.0 - GlossyBsdf { kd, ks, ns }.specular_probability(),
+            _ => 1.0,
         }
     }
 
