@@ -129,6 +129,25 @@ mod tests {
         }
     }
 
+    /// The lobe alone (`kd` zero, as camera paths trace a sharp lobe: `Material::sharp_lobe`)
+    /// is always the lobe picked, and its samples agree with `eval` and `pdf`.
+    #[test]
+    fn the_lobe_alone_samples_as_it_evaluates() {
+        let m = Material::Glossy { kd: Vec3::ZERO, ks: Vec3::splat(0.85), ns: 300.0 };
+        for (j, theta) in [0.0, 45.0, 80.0].into_iter().enumerate() {
+            check_sample_matches_eval(&m, Vec3::Z, dir(Vec3::Z, theta, 0.0), 40 + j as u64);
+        }
+        let (kd, lobe) =
+            Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.5), ns: 300.0 }.sharp_lobe().unwrap();
+        assert_eq!(
+            (kd, lobe),
+            (Vec3::splat(0.3), Material::Glossy { kd: Vec3::ZERO, ks: Vec3::splat(0.5), ns: 300.0 })
+        );
+        assert!(Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.5), ns: 60.0 }
+            .sharp_lobe()
+            .is_none());
+    }
+
     #[test]
     fn peak_is_at_the_mirror_direction() {
         let m = Material::Glossy { kd: Vec3::ZERO, ks: Vec3::ONE, ns: 50.0 };
