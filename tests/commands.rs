@@ -418,16 +418,16 @@ fn an_unused_material_and_a_scene_without_light_are_warned() {
     }
 }
 
-/// An MTL as Blender writes it by default (`Kd 0.8`, `Ks 0.5`, `illum 2`) renders, its Kd and
+/// An MTL whose Phong fields add up past 1 (`Kd 0.8`, `Ks 0.5`, `illum 2`, as Blender's export
+/// writes them, but from another program) renders, its Kd and
 /// Ks scaled to conserve energy with a warning naming the MTL line; `d 0.3` and `illum 9` are
 /// warned as not rendered as written, and so are the PBR extension's `Pr` and `Pm`.
 #[test]
-fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
+fn an_mtl_past_energy_renders_with_warnings_naming_its_lines() {
     let dir = tempfile::tempdir().unwrap();
     let obj = "mtllib t2.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 0 2\nv 1 0 2\n\
                usemtl white\nf 1 3 2\nf 1 4 3\nusemtl odd\nf 4 6 3\nf 4 5 6\n";
-    let mtl =
-        "# Blender MTL File\nnewmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.800000 0.800000 0.800000\n\
+    let mtl = "# Some exporter\nnewmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.800000 0.800000 0.800000\n\
                Ks 0.500000 0.500000 0.500000\nKe 0.0 0.0 0.0\nNi 1.45\nd 1.0\nillum 2\n\n\
                newmtl odd\nKd 0.5 0.5 0.5\nd 0.3\nillum 9\nPr 0.5\nPm 1.0\n";
     let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
@@ -459,6 +459,59 @@ fn a_blender_mtl_renders_with_warnings_naming_its_lines() {
     let kd = white["parameters"]["kd"][0].as_f64().unwrap();
     let ks = white["parameters"]["ks"][0].as_f64().unwrap();
     assert!((kd + ks - 1.0).abs() < 1e-5 && (kd / ks - 1.6).abs() < 1e-4, "kd {kd} ks {ks}");
+}
+
+/// An MTL of Blender's export is read as the principled BSDF it was written from, as its glTF
+/// export is: the default material (`Ns 250`: roughness 0.5, `Ks 0.5`: a 4 % coat) is
+/// diffuse with its `Kd` (it was a 38 % Phong lobe), a smooth one (`Ns 810`: roughness 0.1) a
+/// plastic with a 4 % lobe, and a metallic one (`illum 3`, `Ka 1`: metallic 1; `Ns 360`:
+/// roughness 0.4) a glossy metal of its base colour (it was a perfect mirror of `Ks`), with one
+/// line saying so.
+#[test]
+fn a_blender_mtl_is_read_as_its_principled_bsdf() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib b.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 0 2\nv 1 0 2\n\
+               usemtl white\nf 1 3 2\nusemtl smooth\nf 1 4 3\nusemtl gold\nf 4 6 3\nf 4 5 6\n";
+    let mtl = "# Blender 4.2.0 MTL File: 'None'\n# www.blender.org\n\n\
+               newmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 2\n\n\
+               newmtl smooth\nNs 810.000000\nKa 1.0 1.0 1.0\nKd 0.2 0.4 0.6\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 2\n\n\
+               newmtl gold\nNs 360.000000\nKa 1.0 1.0 1.0\nKd 0.9 0.7 0.3\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 3\n";
+    let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
+                [[mesh]]\nobj = \"b.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
+    std::fs::write(dir.path().join("b.obj"), obj).unwrap();
+    std::fs::write(dir.path().join("b.mtl"), mtl).unwrap();
+    std::fs::write(dir.path().join("b.toml"), toml).unwrap();
+    let out = run(&["info", "--json", dir.path().join("b.toml").to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let by_name =
+        |n: &str| v["materials"].as_array().unwrap().iter().find(|m| m["name"] == n).unwrap().clone();
+    let num = |m: &serde_json::Value, k: &str, i: usize| m["parameters"][k][i].as_f64().unwrap();
+    let white = by_name("white");
+    assert_eq!(white["type"], "diffuse", "{white}");
+    assert!((num(&white, "kd", 0) - 0.8).abs() < 1e-6, "{white}");
+    let smooth = by_name("smooth");
+    assert_eq!(smooth["type"], "glossy", "{smooth}");
+    assert!((num(&smooth, "ks", 0) - 0.04).abs() < 1e-6 && (num(&smooth, "kd", 2) - 0.96 * 0.6).abs() < 1e-6);
+    assert!(smooth["parameters"]["ns"].as_f64().unwrap() >= 1e4 - 1.0, "{smooth}");
+    let gold = by_name("gold");
+    assert_eq!(gold["type"], "glossy", "{gold}");
+    assert!(num(&gold, "kd", 0) == 0.0 && (num(&gold, "ks", 1) - 0.7).abs() < 1e-6, "{gold}");
+    // Roughness 1 - sqrt(0.36) = 0.4: ns = 2 / 0.4⁴ - 2.
+    let ns = gold["parameters"]["ns"].as_f64().unwrap();
+    assert!((ns - (2.0 / 0.4f64.powi(4) - 2.0)).abs() < 0.01, "{gold}");
+    let rendered = photonmap()
+        .current_dir(dir.path())
+        .args(["render", "b.toml", "--quiet", "--spp", "1", "--photons", "1000"])
+        .output()
+        .unwrap();
+    let err = text(&rendered.stderr);
+    assert!(rendered.status.success(), "{err}");
+    assert_eq!(
+        err.matches("written by Blender: its materials are read as Blender's principled BSDF").count(),
+        1,
+        "{err}"
+    );
+    assert!(!err.contains("exceeds 1"), "{err}");
 }
 
 /// The shipped scenes cite the conventions file the repository holds, and no script it lacks.

@@ -57,7 +57,17 @@ pub fn resolve(
                 let (m, textured) = match key {
                     None => (Material::Diffuse { kd: Vec3::splat(0.8) }, MaterialMaps::default()),
                     Some(n) => {
-                        let (m, e) = (mtl.get(n), file.materials.get(n));
+                        let blender = mtl.get(n).filter(|m| m.blender).map(read_blender);
+                        if let Some(b) = &blender {
+                            let note = format!(
+                                "{}: written by Blender: its materials are read as Blender's principled BSDF (roughness from Ns, metallic from Ka), as their glTF export would be",
+                                b.file.display()
+                            );
+                            if !warnings.contains(&note) {
+                                warnings.push(note);
+                            }
+                        }
+                        let (m, e) = (blender.as_ref().or(mtl.get(n)), file.materials.get(n));
                         let material = material(path, n, m, e, &mut warnings)?;
                         let preset = preset.get(n).copied().unwrap_or_default();
                         let textured =
@@ -284,6 +294,66 @@ impl MetalRoughKind {
     }
 }
 
+/// Reads a material of Blender's MTL export as Blender meant it, as its glTF export is read
+/// ([`MetalRoughKind`]), rewriting it in place. Blender writes a principled BSDF's values into
+/// the MTL's Phong fields (`io/wavefront_obj/exporter/obj_export_mtl.cc`): `Ns` = (1 −
+/// roughness)² × 1000 (before Blender 3.4, ((1 − roughness) × 30)², which reads back within
+/// a few hundredths), `Ks` = the specular value (0.5, an F0 of 4 %, by default), `Ka` = the
+/// metallic value where it is not 0 (then `illum 3`), `illum 2` otherwise (`illum 1` where the
+/// specular value is 0: diffuse already). Read as Phong, the default material (`Kd 0.8`,
+/// `Ks 0.5`, `Ns 250`, `illum 2`) was a glossy lobe of 38 % after scaling to conserve energy,
+/// and any metallic material a perfect mirror. Only `illum 2` and `3` are rewritten; emitters,
+/// glass and dissolve keep the MTL mapping.
+fn read_blender(mtl: &MtlMaterial) -> MtlMaterial {
+    let mut mtl = mtl.clone();
+    let emits = mtl.ke.is_some_and(|k| k.iter().any(|&x| x > 0.0));
+    let (metal, rough) = match mtl.illum {
+        Some(2) => (0.0, blender_roughness(mtl.ns)),
+        Some(3) => (mtl.ka.map_or(1.0, |a| a[0].clamp(0.0, 1.0)), blender_roughness(mtl.ns)),
+        _ => return mtl,
+    };
+    if emits {
+        return mtl;
+    }
+    let base = Vec3::from(mtl.kd.unwrap_or([0.8; 3])).clamp(Vec3::ZERO, Vec3::ONE);
+    let base_to_ks = |maps: &mut Vec<MtlMap>| {
+        maps.retain(|m| m.keyword != "map_ks");
+        for m in maps.iter_mut().filter(|m| m.keyword == "map_kd") {
+            m.keyword = "map_ks".to_string();
+        }
+    };
+    let ns = phong_exponent(rough);
+    match MetalRoughKind::of(metal, rough) {
+        MetalRoughKind::Mirror => {
+            (mtl.illum, mtl.ks) = (Some(3), Some(base.to_array()));
+            base_to_ks(&mut mtl.maps);
+        }
+        MetalRoughKind::Metal => {
+            (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(2), Some([0.0; 3]), Some(base.to_array()), Some(ns));
+            base_to_ks(&mut mtl.maps);
+        }
+        MetalRoughKind::Plastic => {
+            let kd = (base * (1.0 - PLASTIC_KS)).to_array();
+            (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(2), Some(kd), Some([PLASTIC_KS; 3]), Some(ns));
+            mtl.maps.retain(|m| m.keyword != "map_ks");
+            for m in mtl.maps.iter_mut().filter(|m| m.keyword == "map_kd") {
+                m.factor = 1.0 - PLASTIC_KS;
+            }
+        }
+        MetalRoughKind::Matte => {
+            (mtl.illum, mtl.kd, mtl.ks) = (Some(1), Some(base.to_array()), Some([0.0; 3]));
+            mtl.maps.retain(|m| m.keyword != "map_ks");
+        }
+    }
+    mtl
+}
+
+/// The principled BSDF's roughness Blender's `Ns` stands for: `1 − √(Ns / 1000)` (0.5 where
+/// the MTL gives no `Ns`).
+fn blender_roughness(ns: Option<f32>) -> f32 {
+    ns.map_or(0.5, |ns| 1.0 - (ns.clamp(0.0, 1000.0) / 1000.0).sqrt())
+}
+
 /// A glTF `metallicRoughnessTexture` (linear; blue the metallic value, green the roughness,
 /// times the material's factors) with the base colour: the material at each texel is what
 /// [`MetalRoughKind`] makes of that texel's values, so the metal parts of a model are drawn
@@ -446,7 +516,13 @@ fn texture_maps(
             ));
         }
         let wrap = if map.clamp { Wrap::Clamp } else { Wrap::Repeat };
-        Ok(TextureRef { texture, scale: map.scale, offset: map.offset, wrap, factor: Vec3::ONE })
+        Ok(TextureRef {
+            texture,
+            scale: map.scale,
+            offset: map.offset,
+            wrap,
+            factor: Vec3::splat(map.factor),
+        })
     };
     for map in mtl.map_or(&[][..], |m| &m.maps[..]) {
         match map.keyword.as_str() {

@@ -14,6 +14,8 @@ pub struct MtlMaterial {
     pub kd: Option<[f32; 3]>,
     pub ks: Option<[f32; 3]>,
     pub ke: Option<[f32; 3]>,
+    /// `Ka`: Blender writes a principled BSDF's metallic value there.
+    pub ka: Option<[f32; 3]>,
     pub ns: Option<f32>,
     pub ni: Option<f32>,
     pub illum: Option<u8>,
@@ -25,6 +27,10 @@ pub struct MtlMaterial {
     /// the last if repeated), for messages.
     pub file: PathBuf,
     pub lines: HashMap<String, usize>,
+    /// Whether the file is Blender's export (its first comment says so): its `Ns`, `Ks` and
+    /// `Ka` are a principled BSDF's roughness, specular and metallic values
+    /// ([`super::materials::read_blender`]).
+    pub blender: bool,
 }
 
 /// One texture statement of an MTL file: `map_Kd -s 2 2 wood.png`.
@@ -45,6 +51,9 @@ pub struct MtlMap {
     pub clamp: bool,
     /// `-bm m` of a `bump`/`map_Bump`: the height map's texels are multiplied by this (default 1).
     pub bump_multiplier: f32,
+    /// A colour map's texels are multiplied by this (1 as written; a Blender plastic's base
+    /// colour map is its diffuse part, 0.96 of it).
+    pub factor: f32,
     /// Options read but not applied (`-mm`, `-bm` of a map other than a bump map, ...), by name.
     pub ignored: Vec<String>,
 }
@@ -76,11 +85,18 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
         let (loaded, _) = tobj::load_mtl_buf(&mut t.as_bytes()).map_err(|e| {
             SceneError::line(path, *line, format!("material library `{name}` could not be read: {e}"))
         })?;
+        // Blender's exporters head the file `# Blender MTL File: …` or `# Blender 4.2.0 MTL
+        // File: …`.
+        let blender = t.lines().take_while(|l| l.trim_start().starts_with('#')).any(|l| {
+            let l = l.trim_start().trim_start_matches('#').trim_start();
+            l.starts_with("Blender") && l.contains("MTL File")
+        });
         for m in loaded {
             let mtl = MtlMaterial {
                 kd: m.diffuse,
                 ks: m.specular,
                 ke: m.emissive,
+                ka: m.ambient,
                 ns: m.shininess,
                 ni: m.optical_density,
                 illum: m.illumination_model,
@@ -88,6 +104,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 dissolve: m.dissolve,
                 file: mtl_path.clone(),
                 lines: lines.remove(&m.name).unwrap_or_default(),
+                blender,
             };
             if !materials.iter().any(|(n, _)| *n == m.name) {
                 materials.push((m.name, mtl));
@@ -436,6 +453,7 @@ fn parse_map(path: &Path, line: usize, keyword: &str, args: &[&str]) -> Result<M
         offset: Vec2::ZERO,
         clamp: false,
         bump_multiplier: 1.0,
+        factor: 1.0,
         ignored: Vec::new(),
     };
     let bump = matches!(map.keyword.as_str(), "bump" | "map_bump");
