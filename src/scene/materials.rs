@@ -284,6 +284,19 @@ pub enum MetalRoughKind {
 }
 
 impl MetalRoughKind {
+    /// The MTL fields a material of this kind is drawn from, for base colour `base` (in
+    /// [0, 1]) and roughness `rough`: `illum`, `Kd`, `Ks` and `Ns` (the table above; the
+    /// fields a kind does not read are zero).
+    pub fn mtl_fields(self, base: Vec3, rough: f32) -> (u8, [f32; 3], [f32; 3], f32) {
+        let ns = phong_exponent(rough);
+        match self {
+            MetalRoughKind::Mirror => (3, [0.0; 3], base.to_array(), ns),
+            MetalRoughKind::Metal => (2, [0.0; 3], base.to_array(), ns),
+            MetalRoughKind::Plastic => (2, (base * (1.0 - PLASTIC_KS)).to_array(), [PLASTIC_KS; 3], ns),
+            MetalRoughKind::Matte => (1, base.to_array(), [0.0; 3], ns),
+        }
+    }
+
     pub fn of(metal: f32, rough: f32) -> MetalRoughKind {
         match (metal >= 0.5, rough) {
             (true, r) if r <= 0.0 => MetalRoughKind::Mirror,
@@ -316,33 +329,16 @@ fn read_blender(mtl: &MtlMaterial) -> MtlMaterial {
         return mtl;
     }
     let base = Vec3::from(mtl.kd.unwrap_or([0.8; 3])).clamp(Vec3::ZERO, Vec3::ONE);
-    let base_to_ks = |maps: &mut Vec<MtlMap>| {
-        maps.retain(|m| m.keyword != "map_ks");
-        for m in maps.iter_mut().filter(|m| m.keyword == "map_kd") {
-            m.keyword = "map_ks".to_string();
-        }
-    };
-    let ns = phong_exponent(rough);
-    match MetalRoughKind::of(metal, rough) {
-        MetalRoughKind::Mirror => {
-            (mtl.illum, mtl.ks) = (Some(3), Some(base.to_array()));
-            base_to_ks(&mut mtl.maps);
-        }
-        MetalRoughKind::Metal => {
-            (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(2), Some([0.0; 3]), Some(base.to_array()), Some(ns));
-            base_to_ks(&mut mtl.maps);
-        }
-        MetalRoughKind::Plastic => {
-            let kd = (base * (1.0 - PLASTIC_KS)).to_array();
-            (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(2), Some(kd), Some([PLASTIC_KS; 3]), Some(ns));
-            mtl.maps.retain(|m| m.keyword != "map_ks");
-            for m in mtl.maps.iter_mut().filter(|m| m.keyword == "map_kd") {
-                m.factor = 1.0 - PLASTIC_KS;
-            }
-        }
-        MetalRoughKind::Matte => {
-            (mtl.illum, mtl.kd, mtl.ks) = (Some(1), Some(base.to_array()), Some([0.0; 3]));
-            mtl.maps.retain(|m| m.keyword != "map_ks");
+    let kind = MetalRoughKind::of(metal, rough);
+    let (illum, kd, ks, ns) = kind.mtl_fields(base, rough);
+    (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(illum), Some(kd), Some(ks), Some(ns));
+    // The base colour's map: the metal's `ks`, the plastic's diffuse part or the matte colour.
+    mtl.maps.retain(|m| m.keyword != "map_ks");
+    for m in mtl.maps.iter_mut().filter(|m| m.keyword == "map_kd") {
+        match kind {
+            MetalRoughKind::Mirror | MetalRoughKind::Metal => m.keyword = "map_ks".to_string(),
+            MetalRoughKind::Plastic => m.factor = 1.0 - PLASTIC_KS,
+            MetalRoughKind::Matte => {}
         }
     }
     mtl
@@ -378,12 +374,12 @@ impl MetalRough {
         let t = self.texture.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE);
         let (metal, rough) = (t.z, t.y);
         let base = self.base_texture.map_or(self.base, |b| b.rgb(textures, uv)).clamp(Vec3::ZERO, Vec3::ONE);
-        let glossy = |kd: Vec3, ks: Vec3| Material::Glossy { kd, ks, ns: phong_exponent(rough) };
-        match MetalRoughKind::of(metal, rough) {
-            MetalRoughKind::Mirror if m.is_specular() => Material::Mirror { ks: base },
-            MetalRoughKind::Mirror | MetalRoughKind::Metal => glossy(Vec3::ZERO, base),
-            MetalRoughKind::Plastic => glossy((1.0 - PLASTIC_KS) * base, Vec3::splat(PLASTIC_KS)),
-            MetalRoughKind::Matte => Material::Diffuse { kd: base },
+        let (illum, kd, ks, ns) = MetalRoughKind::of(metal, rough).mtl_fields(base, rough);
+        let (kd, ks) = (Vec3::from(kd), Vec3::from(ks));
+        match illum {
+            3 if m.is_specular() => Material::Mirror { ks },
+            2 | 3 => Material::Glossy { kd, ks, ns },
+            _ => Material::Diffuse { kd },
         }
     }
 }

@@ -21,8 +21,7 @@
 //! MASK at 0.5, warned. Textures not rendered are named in the warnings.
 
 use super::super::materials::{
-    phong_exponent, AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
-    PLASTIC_KS,
+    AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF, PLASTIC_KS,
 };
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
@@ -291,31 +290,15 @@ pub fn material(
         }
     } else {
         maps.metal_rough = metal_rough.map(|texture| MetalRough { texture, base, base_texture: base_map });
-        match MetalRoughKind::of(metal, rough) {
-            MetalRoughKind::Mirror => {
-                mtl.illum = Some(3);
-                mtl.ks = Some(unit(base));
-                maps.ks = base_map;
-            }
-            MetalRoughKind::Metal => {
-                mtl.illum = Some(2);
-                mtl.kd = Some([0.0; 3]);
-                mtl.ks = Some(unit(base));
-                mtl.ns = Some(phong_exponent(rough));
-                maps.ks = base_map;
-            }
+        let kind = MetalRoughKind::of(metal, rough);
+        let (illum, kd, ks, ns) = kind.mtl_fields(base.clamp(Vec3::ZERO, Vec3::ONE), rough);
+        (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(illum), Some(kd), Some(ks), Some(ns));
+        match kind {
+            MetalRoughKind::Mirror | MetalRoughKind::Metal => maps.ks = base_map,
             MetalRoughKind::Plastic => {
-                mtl.illum = Some(2);
-                mtl.kd = Some(unit(base * (1.0 - PLASTIC_KS)));
-                mtl.ks = Some([PLASTIC_KS; 3]);
-                mtl.ns = Some(phong_exponent(rough));
                 maps.kd = base_map.map(|t| TextureRef { factor: t.factor * (1.0 - PLASTIC_KS), ..t });
             }
-            MetalRoughKind::Matte => {
-                mtl.illum = Some(1);
-                mtl.kd = Some(unit(base));
-                maps.kd = base_map;
-            }
+            MetalRoughKind::Matte => maps.kd = base_map,
         }
     }
     if base.max_element() > 1.0 || base.min_element() < 0.0 {
@@ -329,8 +312,7 @@ pub fn material(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::scene::MAX_NS;
+    use crate::scene::{phong_exponent, MAX_NS};
 
     #[test]
     fn roughness_to_phong() {
