@@ -29,7 +29,7 @@ pub struct MtlMaterial {
     pub lines: HashMap<String, usize>,
     /// Whether the file is Blender's export (its first comment says so): its `Ns`, `Ks` and
     /// `Ka` are a principled BSDF's roughness, specular and metallic values
-    /// ([`super::materials::read_blender`]).
+    /// (read so by the scene's materials, `materials.rs`).
     pub blender: bool,
 }
 
