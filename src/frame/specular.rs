@@ -7,13 +7,13 @@ use super::{Counters, Frame, SurfaceHit};
 use crate::accel::{Accel, Hit};
 use crate::geometry::Ray;
 use crate::material::{Material, TransportMode};
+use glam::Vec3;
+use rand::Rng;
+use rand_pcg::Pcg32;
 
 /// Sharp glossy lobes ([`Material::sharp_lobe`]) a camera path traces before the photon maps
 /// estimate a lobe's light instead, as they do a diffuse surface's.
 pub const GLOSSY_DEPTH: u32 = 3;
-use glam::Vec3;
-use rand::Rng;
-use rand_pcg::Pcg32;
 
 /// The first diffuse or glossy surface a walk reaches.
 #[derive(Clone, Copy, Debug)]
