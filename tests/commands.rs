@@ -514,6 +514,45 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
     assert!(!err.contains("exceeds 1"), "{err}");
 }
 
+/// An MTL with the PBR extension's roughness and metallic values (`Pr`, `Pm`) is read by them
+/// as a glTF material is, from any program: a metal of roughness 0.3 is a glossy metal of its
+/// `Kd` with `ns` = 2/0.3⁴ − 2, a rough dielectric (`Pr 0.7`) is diffuse; neither value is
+/// warned as not rendered, while the extension's sheen (`Ps`) still is.
+#[test]
+fn an_mtl_with_pr_and_pm_is_read_as_metallic_roughness() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = "mtllib p.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n\
+               usemtl metal\nf 1 3 2\nusemtl rough\nf 1 4 3\n";
+    let mtl = "newmtl metal\nKd 0.9 0.6 0.2\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.3\nPm 1\n\n\
+               newmtl rough\nKd 0.3 0.5 0.7\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.7\nPm 0\nPs 0.5\n";
+    let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
+                [[mesh]]\nobj = \"p.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
+    std::fs::write(dir.path().join("p.obj"), obj).unwrap();
+    std::fs::write(dir.path().join("p.mtl"), mtl).unwrap();
+    std::fs::write(dir.path().join("p.toml"), toml).unwrap();
+    let out = run(&["info", "--json", dir.path().join("p.toml").to_str().unwrap()]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let by_name =
+        |n: &str| v["materials"].as_array().unwrap().iter().find(|m| m["name"] == n).unwrap().clone();
+    let metal = by_name("metal");
+    assert_eq!(metal["type"], "glossy", "{metal}");
+    assert!((metal["parameters"]["ks"][1].as_f64().unwrap() - 0.6).abs() < 1e-6, "{metal}");
+    let ns = metal["parameters"]["ns"].as_f64().unwrap();
+    assert!((ns - (2.0 / 0.3f64.powi(4) - 2.0)).abs() < 0.05, "{metal}");
+    let rough = by_name("rough");
+    assert_eq!(rough["type"], "diffuse", "{rough}");
+    let rendered = photonmap()
+        .current_dir(dir.path())
+        .args(["render", "p.toml", "--quiet", "--spp", "1", "--photons", "1000"])
+        .output()
+        .unwrap();
+    let err = text(&rendered.stderr);
+    assert!(rendered.status.success(), "{err}");
+    assert!(err.contains("p.mtl:16: material rough: Ps (MTL's PBR extension) not rendered"), "{err}");
+    assert!(!err.contains("Pr") && !err.contains("Pm"), "{err}");
+    assert!(!err.contains("written by Blender"), "{err}");
+}
+
 /// The shipped scenes cite the conventions file the repository holds, and no script it lacks.
 #[test]
 fn the_shipped_scenes_cite_files_the_repository_holds() {

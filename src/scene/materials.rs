@@ -57,8 +57,8 @@ pub fn resolve(
                 let (m, textured) = match key {
                     None => (Material::Diffuse { kd: Vec3::splat(0.8) }, MaterialMaps::default()),
                     Some(n) => {
-                        let blender = mtl.get(n).filter(|m| m.blender).map(read_blender);
-                        if let Some(b) = &blender {
+                        let principled = mtl.get(n).and_then(read_principled);
+                        if let Some(b) = principled.as_ref().filter(|b| b.blender) {
                             let note = format!(
                                 "{}: written by Blender: its materials are read as Blender's principled BSDF (roughness from Ns, metallic from Ka), as their glTF export would be",
                                 b.file.display()
@@ -67,7 +67,7 @@ pub fn resolve(
                                 warnings.push(note);
                             }
                         }
-                        let (m, e) = (blender.as_ref().or(mtl.get(n)), file.materials.get(n));
+                        let (m, e) = (principled.as_ref().or(mtl.get(n)), file.materials.get(n));
                         let material = material(path, n, m, e, &mut warnings)?;
                         let preset = preset.get(n).copied().unwrap_or_default();
                         let textured =
@@ -185,8 +185,8 @@ fn mtl_at(mtl: &MtlMaterial, keyword: &str) -> String {
 }
 
 /// Warnings for what an MTL material says that is not rendered as written: a dissolve `d`
-/// below 1 (no blending: drawn opaque), the constants of MTL's PBR extension (`Pr`, `Pm`, …)
-/// and, unless the scene file gives the material's `type`
+/// below 1 (no blending: drawn opaque), the constants of MTL's PBR extension (`Ps`, `Pc`, …;
+/// `Pr` and `Pm` where the material was not read by them) and, unless the scene file gives the material's `type`
 /// (`typed`), an `illum` model outside 0..=7 (read as diffuse).
 fn mtl_warnings(name: &str, mtl: &MtlMaterial, typed: bool, warnings: &mut Vec<String>) {
     if let Some(d) = mtl.dissolve.filter(|&d| d < 1.0) {
@@ -198,7 +198,7 @@ fn mtl_warnings(name: &str, mtl: &MtlMaterial, typed: bool, warnings: &mut Vec<S
     let pbr: Vec<&str> = PBR_KEYWORDS.into_iter().filter(|k| mtl.lines.contains_key(*k)).collect();
     if let Some(first) = pbr.first() {
         warnings.push(format!(
-            "{}material {name}: {} (MTL's PBR extension) not rendered: drawn from Kd, Ks, Ns and illum",
+            "{}material {name}: {} (MTL's PBR extension) not rendered",
             mtl_at(mtl, first),
             pbr.join(", ")
         ));
@@ -307,27 +307,39 @@ impl MetalRoughKind {
     }
 }
 
-/// Reads a material of Blender's MTL export as Blender meant it, as its glTF export is read
-/// ([`MetalRoughKind`]), rewriting it in place. Blender writes a principled BSDF's values into
-/// the MTL's Phong fields (`io/wavefront_obj/exporter/obj_export_mtl.cc`): `Ns` = (1 −
-/// roughness)² × 1000 (before Blender 3.4, ((1 − roughness) × 30)², which reads back within
-/// a few hundredths), `Ks` = the specular value (0.5, an F0 of 4 %, by default), `Ka` = the
-/// metallic value where it is not 0 (then `illum 3`), `illum 2` otherwise (`illum 1` where the
-/// specular value is 0: diffuse already). Read as Phong, the default material (`Kd 0.8`,
-/// `Ks 0.5`, `Ns 250`, `illum 2`) was a glossy lobe of 38 % after scaling to conserve energy,
-/// and any metallic material a perfect mirror. Only `illum 2` and `3` are rewritten; emitters,
-/// glass and dissolve keep the MTL mapping.
-fn read_blender(mtl: &MtlMaterial) -> MtlMaterial {
-    let mut mtl = mtl.clone();
+/// Reads a material of an MTL that holds a principled BSDF as that BSDF, as a glTF
+/// material is read ([`MetalRoughKind`]): one with the PBR extension's roughness `Pr` (and
+/// metallic `Pm`, else 0, or 1 with `illum 3`), or any of Blender's export. Blender writes the
+/// BSDF's values into the MTL's Phong fields (`io/wavefront_obj/exporter/obj_export_mtl.cc`):
+/// `Ns` = (1 − roughness)² × 1000 (before Blender 3.4, ((1 − roughness) × 30)², which reads
+/// back within a few hundredths), `Ks` = the specular value (0.5, an F0 of 4 %, by default),
+/// `Ka` = the metallic value where it is not 0 (then `illum 3`), `illum 2` otherwise (`illum
+/// 1` where the specular value is 0: diffuse already), and `Pr`, `Pm` besides with its PBR
+/// option. Read as Phong, the default material (`Kd 0.8`, `Ks 0.5`, `Ns 250`, `illum 2`) was
+/// a glossy lobe of 38 % after scaling to conserve energy, and any metallic material a perfect
+/// mirror. `None` for any other material, and for emitters, glass and `illum` beyond 3, which
+/// keep the MTL mapping.
+fn read_principled(mtl: &MtlMaterial) -> Option<MtlMaterial> {
     let emits = mtl.ke.is_some_and(|k| k.iter().any(|&x| x > 0.0));
-    let (metal, rough) = match mtl.illum {
-        Some(2) => (0.0, blender_roughness(mtl.ns)),
-        Some(3) => (mtl.ka.map_or(1.0, |a| a[0].clamp(0.0, 1.0)), blender_roughness(mtl.ns)),
-        _ => return mtl,
-    };
-    if emits {
-        return mtl;
+    let principled = mtl.blender || mtl.roughness.is_some();
+    if emits
+        || !principled
+        || mtl.illum.is_some_and(|i| i > 3)
+        || (mtl.blender && mtl.illum.is_none_or(|i| i < 2))
+    {
+        return None;
     }
+    let rough = mtl.roughness.unwrap_or_else(|| blender_roughness(mtl.ns)).clamp(0.0, 1.0);
+    let metal = match mtl.metallic {
+        Some(m) => m,
+        None if mtl.illum == Some(3) => mtl.ka.filter(|_| mtl.blender).map_or(1.0, |a| a[0]),
+        None => 0.0,
+    }
+    .clamp(0.0, 1.0);
+    let mut mtl = mtl.clone();
+    // Read: not among the extension's constants warned as not rendered.
+    mtl.lines.remove("Pr");
+    mtl.lines.remove("Pm");
     let base = Vec3::from(mtl.kd.unwrap_or([0.8; 3])).clamp(Vec3::ZERO, Vec3::ONE);
     let kind = MetalRoughKind::of(metal, rough);
     let (illum, kd, ks, ns) = kind.mtl_fields(base, rough);
@@ -341,7 +353,7 @@ fn read_blender(mtl: &MtlMaterial) -> MtlMaterial {
             MetalRoughKind::Matte => {}
         }
     }
-    mtl
+    Some(mtl)
 }
 
 /// The principled BSDF's roughness Blender's `Ns` stands for: `1 − √(Ns / 1000)` (0.5 where

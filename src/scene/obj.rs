@@ -16,6 +16,9 @@ pub struct MtlMaterial {
     pub ke: Option<[f32; 3]>,
     /// `Ka`: Blender writes a principled BSDF's metallic value there.
     pub ka: Option<[f32; 3]>,
+    /// `Pr` and `Pm`, the PBR extension's roughness and metallic values.
+    pub roughness: Option<f32>,
+    pub metallic: Option<f32>,
     pub ns: Option<f32>,
     pub ni: Option<f32>,
     pub illum: Option<u8>,
@@ -97,6 +100,8 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 ks: m.specular,
                 ke: m.emissive,
                 ka: m.ambient,
+                roughness: pbr_value(&m, "Pr"),
+                metallic: pbr_value(&m, "Pm"),
                 ns: m.shininess,
                 ni: m.optical_density,
                 illum: m.illumination_model,
@@ -382,7 +387,7 @@ fn check_mtl(path: &Path, text: &str) -> Result<(HashMap<String, Vec<MtlMap>>, S
                 continue;
             }
             "Kd" | "Ks" | "Ke" | "Ka" | "Tf" => 3,
-            "Ns" | "Ni" | "d" | "Tr" | "illum" => 1,
+            "Ns" | "Ni" | "d" | "Tr" | "illum" | "Pr" | "Pm" => 1,
             // The PBR extension's constants: recorded where they are, for the warning that they
             // are not rendered, and not checked (they were never read).
             k if PBR_KEYWORDS.contains(&k) => {
@@ -431,8 +436,15 @@ fn check_mtl(path: &Path, text: &str) -> Result<(HashMap<String, Vec<MtlMap>>, S
     Ok((maps, lines))
 }
 
-/// The constants of MTL's PBR extension (roughness, metallic, sheen, clearcoat, anisotropy),
-/// which are not rendered: the material is drawn from `Kd`, `Ks`, `Ns` and `illum`.
+/// The value of the PBR extension's `key` (`Pr`, `Pm`) in `m` (checked a finite number by
+/// `check_mtl`).
+fn pbr_value(m: &tobj::Material, key: &str) -> Option<f32> {
+    m.unknown_param.get(key)?.split_whitespace().next()?.parse().ok()
+}
+
+/// The constants of MTL's PBR extension (roughness, metallic, sheen, clearcoat, anisotropy);
+/// all but `Pr` and `Pm`, which a principled reading takes (`materials.rs`), are not rendered:
+/// the material is drawn from `Kd`, `Ks`, `Ns` and `illum`.
 pub const PBR_KEYWORDS: [&str; 7] = ["Pr", "Pm", "Ps", "Pc", "Pcr", "aniso", "anisor"];
 
 /// Whether an MTL keyword names a texture map.
