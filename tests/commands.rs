@@ -461,57 +461,79 @@ fn an_mtl_past_energy_renders_with_warnings_naming_its_lines() {
     assert!((kd + ks - 1.0).abs() < 1e-5 && (kd / ks - 1.6).abs() < 1e-4, "kd {kd} ks {ks}");
 }
 
-/// An MTL of Blender's export is read as the principled BSDF it was written from, as its glTF
-/// export is: the default material (`Ns 250`: roughness 0.5, `Ks 0.5`: a 4 % coat) is
-/// diffuse with its `Kd` (it was a 38 % Phong lobe), a smooth one (`Ns 810`: roughness 0.1) a
-/// plastic with a 4 % lobe, and a metallic one (`illum 3`, `Ka 1`: metallic 1; `Ns 360`:
-/// roughness 0.4) a glossy metal of its base colour (it was a perfect mirror of `Ks`), with one
-/// line saying so.
-#[test]
-fn a_blender_mtl_is_read_as_its_principled_bsdf() {
+/// The materials `info --json` reports for an OBJ of four triangles, the first two of
+/// material `a`, the others of `b`, with the MTL `mtl`, and what a render of it writes on
+/// stderr (the render must succeed).
+fn mtl_materials(mtl: &str) -> (Vec<serde_json::Value>, String) {
     let dir = tempfile::tempdir().unwrap();
-    let obj = "mtllib b.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 0 2\nv 1 0 2\n\
-               usemtl white\nf 1 3 2\nusemtl smooth\nf 1 4 3\nusemtl gold\nf 4 6 3\nf 4 5 6\n";
-    let mtl = "# Blender 4.2.0 MTL File: 'None'\n# www.blender.org\n\n\
-               newmtl white\nNs 250.000000\nKa 1.0 1.0 1.0\nKd 0.8 0.8 0.8\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 2\n\n\
-               newmtl smooth\nNs 810.000000\nKa 1.0 1.0 1.0\nKd 0.2 0.4 0.6\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 2\n\n\
-               newmtl gold\nNs 360.000000\nKa 1.0 1.0 1.0\nKd 0.9 0.7 0.3\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum 3\n";
+    let obj = "mtllib m.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv -1 0 2\nv 1 0 2\n\
+               usemtl a\nf 1 3 2\nf 1 4 3\nusemtl b\nf 4 6 3\nf 4 5 6\n";
     let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
-                [[mesh]]\nobj = \"b.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
-    std::fs::write(dir.path().join("b.obj"), obj).unwrap();
-    std::fs::write(dir.path().join("b.mtl"), mtl).unwrap();
-    std::fs::write(dir.path().join("b.toml"), toml).unwrap();
-    let out = run(&["info", "--json", dir.path().join("b.toml").to_str().unwrap()]);
+                [[mesh]]\nobj = \"m.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
+    std::fs::write(dir.path().join("m.obj"), obj).unwrap();
+    std::fs::write(dir.path().join("m.mtl"), mtl).unwrap();
+    std::fs::write(dir.path().join("m.toml"), toml).unwrap();
+    let out = run(&["info", "--json", dir.path().join("m.toml").to_str().unwrap()]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let by_name =
-        |n: &str| v["materials"].as_array().unwrap().iter().find(|m| m["name"] == n).unwrap().clone();
-    let num = |m: &serde_json::Value, k: &str, i: usize| m["parameters"][k][i].as_f64().unwrap();
-    let white = by_name("white");
-    assert_eq!(white["type"], "diffuse", "{white}");
-    assert!((num(&white, "kd", 0) - 0.8).abs() < 1e-6, "{white}");
-    let smooth = by_name("smooth");
-    assert_eq!(smooth["type"], "glossy", "{smooth}");
-    assert!((num(&smooth, "ks", 0) - 0.04).abs() < 1e-6 && (num(&smooth, "kd", 2) - 0.96 * 0.6).abs() < 1e-6);
-    assert!(smooth["parameters"]["ns"].as_f64().unwrap() >= 1e4 - 1.0, "{smooth}");
-    let gold = by_name("gold");
-    assert_eq!(gold["type"], "glossy", "{gold}");
-    assert!(num(&gold, "kd", 0) == 0.0 && (num(&gold, "ks", 1) - 0.7).abs() < 1e-6, "{gold}");
-    // Roughness 1 - sqrt(0.36) = 0.4: ns = 2 / 0.4⁴ - 2.
-    let ns = gold["parameters"]["ns"].as_f64().unwrap();
-    assert!((ns - (2.0 / 0.4f64.powi(4) - 2.0)).abs() < 0.01, "{gold}");
     let rendered = photonmap()
         .current_dir(dir.path())
-        .args(["render", "b.toml", "--quiet", "--spp", "1", "--photons", "1000"])
+        .args(["render", "m.toml", "--quiet", "--spp", "1", "--photons", "1000"])
         .output()
         .unwrap();
     let err = text(&rendered.stderr);
     assert!(rendered.status.success(), "{err}");
-    assert_eq!(
-        err.matches("written by Blender: its materials are read as Blender's principled BSDF").count(),
-        1,
-        "{err}"
-    );
+    (v["materials"].as_array().unwrap().clone(), err)
+}
+
+/// Material `name` of [`mtl_materials`]' list.
+fn material<'a>(list: &'a [serde_json::Value], name: &str) -> &'a serde_json::Value {
+    list.iter().find(|m| m["name"] == name).unwrap()
+}
+
+/// Parameter `key` of material `m`: the number, or component `i` of the colour.
+fn parameter(m: &serde_json::Value, key: &str, i: usize) -> f64 {
+    let p = &m["parameters"][key];
+    p.as_f64().unwrap_or_else(|| p[i].as_f64().unwrap())
+}
+
+/// An MTL of Blender's export is read as the principled BSDF it was written from, as its glTF
+/// export is: the default material (`Ns 250`: roughness 0.5, `Ks 0.5`: a 4 % coat) is diffuse
+/// with its `Kd` (it was a 38 % Phong lobe), and a metallic one (`illum 3`, `Ka 1`: metallic
+/// 1; `Ns 360`: roughness 0.4) a glossy metal of its base colour (it was a perfect mirror of
+/// `Ks`), with one line saying so; a smooth one (`Ns 810`: roughness 0.1) is a plastic with a
+/// 4 % lobe.
+#[test]
+fn a_blender_mtl_is_read_as_its_principled_bsdf() {
+    let header = "# Blender 4.2.0 MTL File: 'None'\n# www.blender.org\n\n";
+    let blender = |name: &str, ns: f32, kd: &str, illum: u8| {
+        format!("newmtl {name}\nNs {ns}\nKa 1.0 1.0 1.0\nKd {kd}\nKs 0.5 0.5 0.5\nKe 0 0 0\nNi 1.45\nd 1.0\nillum {illum}\n\n")
+    };
+    let mtl =
+        format!("{header}{}{}", blender("a", 250.0, "0.8 0.8 0.8", 2), blender("b", 360.0, "0.9 0.7 0.3", 3));
+    let (list, err) = mtl_materials(&mtl);
+    let white = material(&list, "a");
+    assert_eq!(white["type"], "diffuse", "{white}");
+    assert!((parameter(white, "kd", 0) - 0.8).abs() < 1e-6, "{white}");
+    let gold = material(&list, "b");
+    assert_eq!(gold["type"], "glossy", "{gold}");
+    assert!(parameter(gold, "kd", 0) == 0.0 && (parameter(gold, "ks", 1) - 0.7).abs() < 1e-6, "{gold}");
+    // Roughness 1 - sqrt(0.36) = 0.4: ns = 2 / 0.4⁴ - 2.
+    assert!((parameter(gold, "ns", 0) - (2.0 / 0.4f64.powi(4) - 2.0)).abs() < 0.01, "{gold}");
+    let note = "written by Blender: its materials are read as Blender's principled BSDF";
+    assert_eq!(err.matches(note).count(), 1, "{err}");
     assert!(!err.contains("exceeds 1"), "{err}");
+    let (list, _) = mtl_materials(&format!(
+        "{header}{}{}",
+        blender("a", 810.0, "0.2 0.4 0.6", 2),
+        blender("b", 0.0, "1 1 1", 1)
+    ));
+    let smooth = material(&list, "a");
+    assert_eq!(smooth["type"], "glossy", "{smooth}");
+    assert!(
+        (parameter(smooth, "ks", 0) - 0.04).abs() < 1e-6
+            && (parameter(smooth, "kd", 2) - 0.96 * 0.6).abs() < 1e-6
+    );
+    assert!(parameter(smooth, "ns", 0) >= 1e4 - 1.0, "{smooth}");
 }
 
 /// An MTL with the PBR extension's roughness and metallic values (`Pr`, `Pm`) is read by them
@@ -520,35 +542,15 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
 /// warned as not rendered, while the extension's sheen (`Ps`) still is.
 #[test]
 fn an_mtl_with_pr_and_pm_is_read_as_metallic_roughness() {
-    let dir = tempfile::tempdir().unwrap();
-    let obj = "mtllib p.mtl\nv -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\n\
-               usemtl metal\nf 1 3 2\nusemtl rough\nf 1 4 3\n";
-    let mtl = "newmtl metal\nKd 0.9 0.6 0.2\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.3\nPm 1\n\n\
-               newmtl rough\nKd 0.3 0.5 0.7\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.7\nPm 0\nPs 0.5\n";
-    let toml = "[camera]\neye = [0, 3, -3]\ntarget = [0, 0, 0]\nup = [0, 1, 0]\nvfov_deg = 60\nwidth = 8\nheight = 8\n\n\
-                [[mesh]]\nobj = \"p.obj\"\n\n[[light]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [1, 1, 1]\n";
-    std::fs::write(dir.path().join("p.obj"), obj).unwrap();
-    std::fs::write(dir.path().join("p.mtl"), mtl).unwrap();
-    std::fs::write(dir.path().join("p.toml"), toml).unwrap();
-    let out = run(&["info", "--json", dir.path().join("p.toml").to_str().unwrap()]);
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let by_name =
-        |n: &str| v["materials"].as_array().unwrap().iter().find(|m| m["name"] == n).unwrap().clone();
-    let metal = by_name("metal");
+    let mtl = "newmtl a\nKd 0.9 0.6 0.2\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.3\nPm 1\n\n\
+               newmtl b\nKd 0.3 0.5 0.7\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.7\nPm 0\nPs 0.5\n";
+    let (list, err) = mtl_materials(mtl);
+    let metal = material(&list, "a");
     assert_eq!(metal["type"], "glossy", "{metal}");
-    assert!((metal["parameters"]["ks"][1].as_f64().unwrap() - 0.6).abs() < 1e-6, "{metal}");
-    let ns = metal["parameters"]["ns"].as_f64().unwrap();
-    assert!((ns - (2.0 / 0.3f64.powi(4) - 2.0)).abs() < 0.05, "{metal}");
-    let rough = by_name("rough");
-    assert_eq!(rough["type"], "diffuse", "{rough}");
-    let rendered = photonmap()
-        .current_dir(dir.path())
-        .args(["render", "p.toml", "--quiet", "--spp", "1", "--photons", "1000"])
-        .output()
-        .unwrap();
-    let err = text(&rendered.stderr);
-    assert!(rendered.status.success(), "{err}");
-    assert!(err.contains("p.mtl:16: material rough: Ps (MTL's PBR extension) not rendered"), "{err}");
+    assert!((parameter(metal, "ks", 1) - 0.6).abs() < 1e-6, "{metal}");
+    assert!((parameter(metal, "ns", 0) - (2.0 / 0.3f64.powi(4) - 2.0)).abs() < 0.05, "{metal}");
+    assert_eq!(material(&list, "b")["type"], "diffuse");
+    assert!(err.contains("m.mtl:16: material b: Ps (MTL's PBR extension) not rendered"), "{err}");
     assert!(!err.contains("Pr") && !err.contains("Pm"), "{err}");
     assert!(!err.contains("written by Blender"), "{err}");
 }
