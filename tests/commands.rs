@@ -534,6 +534,16 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
             && (parameter(smooth, "kd", 2) - 0.96 * 0.6).abs() < 1e-6
     );
     assert!(parameter(smooth, "ns", 0) >= 1e4 - 1.0, "{smooth}");
+    assert_eq!(material(&list, "b")["type"], "diffuse");
+    // With its PBR option Blender writes `Pr` and `Pm` too, which say a metal of specular 0
+    // (written `illum 1`) is one.
+    let pbr = format!(
+        "{header}{}Pr 0.2\nPm 1\n{}",
+        blender("a", 640.0, "0.9 0.9 0.9", 1),
+        blender("b", 0.0, "1 1 1", 1)
+    );
+    let (list, err) = mtl_materials(&pbr);
+    assert_eq!(material(&list, "a")["type"], "glossy", "{err}");
 }
 
 /// An MTL with the PBR extension's roughness and metallic values (`Pr`, `Pm`) is read by them

@@ -321,12 +321,10 @@ impl MetalRoughKind {
 /// keep the MTL mapping.
 fn read_principled(mtl: &MtlMaterial) -> Option<MtlMaterial> {
     let emits = mtl.ke.is_some_and(|k| k.iter().any(|&x| x > 0.0));
-    let principled = mtl.blender || mtl.roughness.is_some();
-    if emits
-        || !principled
-        || mtl.illum.is_some_and(|i| i > 3)
-        || (mtl.blender && mtl.illum.is_none_or(|i| i < 2))
-    {
+    let by_pbr = mtl.roughness.is_some() && mtl.illum.is_none_or(|i| i <= 3);
+    // Blender writes `illum 1` where the specular value is 0: diffuse as read.
+    let by_blender = mtl.blender && matches!(mtl.illum, Some(2) | Some(3));
+    if emits || !(by_pbr || by_blender) {
         return None;
     }
     let rough = mtl.roughness.unwrap_or_else(|| blender_roughness(mtl.ns)).clamp(0.0, 1.0);
