@@ -311,7 +311,7 @@ impl MetalRoughKind {
 /// material is read ([`MetalRoughKind`]): one with the PBR extension's roughness `Pr` (and
 /// metallic `Pm`, else 0, or 1 with `illum 3`), or any of Blender's export. Blender writes the
 /// BSDF's values into the MTL's Phong fields (`io/wavefront_obj/exporter/obj_export_mtl.cc`):
-/// `Ns` = (1 − roughness)² × 1000 (before Blender 3.4, ((1 − roughness) × 30)², which reads
+/// `Ns` = (1 − roughness)² × 1000 (in some earlier versions ((1 − roughness) × 30)², which reads
 /// back within a few hundredths), `Ks` = the specular value (0.5, an F0 of 4 %, by default),
 /// `Ka` = the metallic value where it is not 0 (then `illum 3`), `illum 2` otherwise (`illum
 /// 1` where the specular value is 0: diffuse already), and `Pr`, `Pm` besides with its PBR
