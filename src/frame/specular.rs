@@ -109,10 +109,9 @@ pub fn walk<'s, A: Accel>(
 
 /// The ray a camera path sends on from the landing `v` through its sharp glossy lobe `lobe`
 /// (one direction sampled from the lobe alone, its throughput times `scale`), walked through
-/// any mirrors and glass: `visit` sees every surface reached, the sky if it leaves the scene,
-/// and whether the ray itself reached it (`true`: straight along the lobe's direction, where
-/// emitters are the direct light the landing's light samples and BSDF samples take). Returns
-/// the next landing, `None` as [`walk`] does.
+/// any mirrors and glass: the emission it sees past a mirror or glass (emitters and the sky
+/// seen straight along it are the direct light the landing's light samples and BSDF samples
+/// take), throughput included, and the next landing (`None` as [`walk`] returns it).
 #[allow(clippy::too_many_arguments)]
 pub fn through_lobe<'s, A: Accel>(
     frame: &Frame<'s, A>,
@@ -123,13 +122,19 @@ pub fn through_lobe<'s, A: Accel>(
     rng: &mut Pcg32,
     c: &mut Counters,
     count: fn(&mut Counters),
-    mut visit: impl FnMut(Seen, Vec3, bool),
-) -> Option<Landing> {
-    let s = v.hit.normals().sample(lobe, v.wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)?;
+) -> (Vec3, Option<Landing>) {
+    let Some(s) =
+        v.hit.normals().sample(lobe, v.wo, rng.gen(), [rng.gen(), rng.gen()], TransportMode::Radiance)
+    else {
+        return (Vec3::ZERO, None);
+    };
     let start = Start::Ray(Ray::new(v.hit.spawn(s.sample.wi), s.sample.wi));
-    let mut first = true;
-    walk(frame, start, v.beta * s.weight * scale, max_depth, rng, c, count, |seen, beta| {
-        visit(seen, beta, first);
+    let (mut emitted, mut first) = (Vec3::ZERO, true);
+    let landing = walk(frame, start, v.beta * s.weight * scale, max_depth, rng, c, count, |seen, beta| {
+        if !first {
+            emitted += beta * seen.emitted(frame.lights);
+        }
         first = false;
-    })
+    });
+    (emitted, landing)
 }

@@ -498,23 +498,7 @@ impl<A: Accel> Shading<'_, '_, A> {
     ) -> Vec3 {
         let here = Landing { hit: *hit, wo, m: *m, beta: Vec3::ONE };
         let count = |c: &mut Counters| c.rays.specular += 1;
-        let mut l = Vec3::ZERO;
-        let lights = self.frame.lights;
-        let landing = through_lobe(
-            self.frame,
-            &here,
-            lobe,
-            1.0,
-            self.cfg.max_depth,
-            rng,
-            c,
-            count,
-            |seen, beta, first| {
-                if !first {
-                    l += beta * seen.emitted(lights);
-                }
-            },
-        );
+        let (mut l, landing) = through_lobe(self.frame, &here, lobe, 1.0, self.cfg.max_depth, rng, c, count);
         if let Some(v) = landing {
             let later = later.map(|(sample, beta)| (sample, beta * v.beta));
             l += v.beta

@@ -260,11 +260,9 @@ fn trace_camera<A: Accel>(
         let Some(v) = &landing else { break };
         l += v.beta * direct_light(frame, &v.hit, v.wo, &v.m, cfg.light_samples, rng, c);
         let Some((_, lobe)) = v.m.sharp_lobe().filter(|_| depth < GLOSSY_DEPTH) else { break };
-        landing = through_lobe(frame, v, &lobe, 1.0, cfg.max_depth, rng, c, count, |seen, beta, first| {
-            if !first {
-                l += beta * seen.emitted(frame.lights);
-            }
-        });
+        let (emitted, next) = through_lobe(frame, v, &lobe, 1.0, cfg.max_depth, rng, c, count);
+        l += emitted;
+        landing = next;
     }
     l
 }
@@ -295,7 +293,7 @@ pub(super) fn visible_point<'s, A: Accel>(
         if rng.gen::<f32>() < q {
             return Some(Landing { m: Material::Diffuse { kd }, beta: v.beta / q, ..v });
         }
-        v = through_lobe(frame, &v, &lobe, 1.0 / (1.0 - q), cfg.max_depth, rng, c, count, |_, _, _| {})?;
+        v = through_lobe(frame, &v, &lobe, 1.0 / (1.0 - q), cfg.max_depth, rng, c, count).1?;
     }
     Some(v)
 }
