@@ -33,6 +33,10 @@ or refused):
                  (2 pi) cos^ns of the angle to the mirror direction, two-sided, the same
                  lobe sampling), written here as a Mitsuba BSDF plugin in Python: the reference
                  checks our light transport on glossy surfaces, not the choice of the lobe
+    principled -> glTF's metallic-roughness BRDF as src/material/principled.rs draws it (GGX,
+                 height-correlated Smith, Schlick's Fresnel on the base colour by the metallic
+                 value over (1 - m) 0.96 of it diffusely), a Python plugin too, its lobe sampled
+                 by Mitsuba's own GGX visible-normal sampler (mi.MicrofacetDistribution), not ours
     spot, anything else -> error (no approximation)
 
 Transport: `path`, max_depth -1, rr_depth 5, hide_emitters false, independent sampler.
@@ -94,6 +98,8 @@ def parse_mtl(path):
             cur["ni"] = float(w[1])
         elif key == "illum":
             cur["illum"] = int(w[1])
+        elif key in ("Pr", "Pm"):
+            cur[{"Pr": "roughness", "Pm": "metallic"}[key]] = float(w[1])
         elif key.lower() == "map_kd":
             if any(x.startswith("-") for x in w[1:]):
                 raise Refused(f"{path}:{lineno}: map_Kd options are not reproduced here")
@@ -176,7 +182,9 @@ def parse_obj(path):
 
 
 def mtl_kind(m):
-    """src/scene/mod.rs mtl_kind: Ke -> emissive; illum 3/5 mirror; 4/6/7 glass; 2 with Ks, Ns glossy."""
+    """src/scene/materials.rs mtl_kind: Ke -> emissive; illum 3/5 mirror; 4/6/7 glass; 2 with Pr
+    principled (as written by scripts/make_scenes.py: no Blender export here); 2 with Ks, Ns
+    glossy."""
     if any(x > 0 for x in m.get("ke", [0, 0, 0])):
         return "emissive"
     illum = m.get("illum")
@@ -184,6 +192,8 @@ def mtl_kind(m):
         return "mirror"
     if illum in (4, 6, 7):
         return "glass"
+    if illum == 2 and "roughness" in m:
+        return "principled"
     if illum == 2 and any(x > 0 for x in m.get("ks", [0, 0, 0])) and "ns" in m:
         return "glossy"
     return "diffuse"
@@ -199,7 +209,7 @@ def resolve_material(name, mtl, entry):
     pick = lambda f, default: entry.get(f, mtl.get(f, default))  # noqa: E731
     kind = entry.get("type") or mtl_kind(mtl)
     m = {"type": kind}
-    if kind in ("diffuse", "emissive", "glossy"):
+    if kind in ("diffuse", "emissive", "glossy", "principled"):
         m["kd"] = pick("kd", [0.0, 0.0, 0.0])
         if "kd_texture" in entry:
             m["kd_texture"] = str(Path(SCENE_DIR[0]) / entry["kd_texture"])
@@ -216,7 +226,12 @@ def resolve_material(name, mtl, entry):
         m["ns"] = float(pick("ns", 1.0))
         if "kd_texture" in m or "ks_texture" in entry or "ks_texture" in mtl:
             raise Refused(f"material {name}: textured glossy materials are not drawn here")
-    if kind not in ("diffuse", "emissive", "mirror", "glass", "glossy"):
+    if kind == "principled":
+        m["metallic"] = float(pick("metallic", 0.0))
+        m["roughness"] = float(pick("roughness", 0.5))
+        if "kd_texture" in m:
+            raise Refused(f"material {name}: textured principled materials are not drawn here")
+    if kind not in ("diffuse", "emissive", "mirror", "glass", "glossy", "principled"):
         raise Refused(f"material {name}: unknown type {kind!r}")
     return m
 
@@ -339,6 +354,12 @@ def bsdf_dict(m):
             for c, v in zip("rgb", m[key]):
                 d[f"{key}_{c}"] = float(v)
         return d
+    if m["type"] == "principled":
+        # src/material/principled.rs: alpha = roughness^2, at least MIN_ALPHA.
+        d = {"type": "ours_principled", "metallic": m["metallic"], "alpha": max(m["roughness"] ** 2, 0.01)}
+        for c, v in zip("rgb", m["kd"]):
+            d[f"base_{c}"] = min(max(float(v), 0.0), 1.0)
+        return d
     raise Refused(m["type"])
 
 
@@ -414,6 +435,93 @@ def register_phong(mi, dr):
             return f"OursPhong[ns={self.ns}, ps={self.ps}]"
 
     mi.register_bsdf("ours_phong", lambda props: OursPhong(props))
+
+
+def register_principled(mi, dr):
+    """Registers `ours_principled`: src/material/principled.rs's BRDF, two-sided as
+    `ours_phong`: f = kd / pi + F(wi . h) D(h) V, kd = (1 - m) 0.96 base, F Schlick's with F0 =
+    (1 - m) 0.04 + m base rising by m (1 - base) (1 - c)^5, D GGX, V glTF's height-correlated
+    Smith term. The lobe is picked with probability s / (s + d) (s the mean of F at the
+    viewer's cosine, d the mean of kd) and sampled by Mitsuba's GGX visible-normal sampler."""
+    glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+    diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+
+    class OursPrincipled(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            base = [props[f"base_{c}"] for c in "rgb"]
+            m, self.alpha = float(props["metallic"]), float(props["alpha"])
+            self.kd = mi.Color3f(*[(1.0 - m) * 0.96 * b for b in base])
+            self.f0 = mi.Color3f(*[(1.0 - m) * 0.04 + m * b for b in base])
+            self.rise = mi.Color3f(*[m * (1.0 - b) for b in base])
+            self.kd_sum = sum((1.0 - m) * 0.96 * b for b in base)
+            self.distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, self.alpha, True)
+            self.m_components = [glossy, diffuse]
+            self.m_flags = glossy | diffuse
+
+        def side(self, si):
+            return dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)
+
+        def fresnel(self, c):
+            x = dr.clip(1.0 - c, 0.0, 1.0)
+            return self.f0 + self.rise * (x * x * x * x * x)
+
+        def lobe_probability(self, wi):
+            f = self.fresnel(wi.z)
+            s = f[0] + f[1] + f[2]
+            return dr.select(s + self.kd_sum > 0, s / (s + self.kd_sum), 0.0)
+
+        def f_pdf(self, wi, wo):
+            """f and the mixture's density for local directions on the upper side (wi: toward
+            the viewer, wo: toward the light)."""
+            h = dr.normalize(wi + wo)
+            a2 = self.alpha * self.alpha
+            root = lambda c: dr.sqrt(c * c * (1.0 - a2) + a2)  # noqa: E731
+            v = 0.5 / (wo.z * root(wi.z) + wi.z * root(wo.z))
+            f = self.kd * dr.inv_pi + self.fresnel(dr.dot(wi, h)) * (self.distr.eval(h) * v)
+            ps = self.lobe_probability(wi)
+            lobe = self.distr.pdf(wi, h) / (4.0 * dr.dot(wo, h))
+            pdf = (1.0 - ps) * wo.z * dr.inv_pi + ps * lobe
+            valid = (wi.z > 0) & (wo.z > 0)
+            return f, dr.select(valid, pdf, 0.0), valid
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            s = self.side(si)
+            wi, wo = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s), mi.Vector3f(wo.x, wo.y, wo.z * s)
+            f, pdf, valid = self.f_pdf(wi, wo)
+            ok = active & valid
+            return dr.select(ok, f * wo.z, 0.0), dr.select(ok, pdf, 0.0)
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.eval_pdf(ctx, si, wo, active)[0]
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.eval_pdf(ctx, si, wo, active)[1]
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            s = self.side(si)
+            wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s)
+            lobe = sample1 < self.lobe_probability(wi)
+            normal, _ = self.distr.sample(wi, sample2)
+            wo = dr.select(lobe, mi.reflect(wi, normal), mi.warp.square_to_cosine_hemisphere(sample2))
+            f, pdf, valid = self.f_pdf(wi, wo)
+            bs = mi.BSDFSample3f()
+            bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * s)
+            bs.pdf = pdf
+            bs.eta = 1.0
+            bs.sampled_type = dr.select(lobe, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                                        mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
+            bs.sampled_component = dr.select(lobe, mi.UInt32(0), mi.UInt32(1))
+            ok = active & valid & (pdf > 0)
+            return bs, dr.select(ok, f * wo.z / pdf, 0.0)
+
+        def traverse(self, callback):
+            pass
+
+        def to_string(self):
+            return f"OursPrincipled[alpha={self.alpha}]"
+
+    mi.register_bsdf("ours_principled", lambda props: OursPrincipled(props))
 
 
 def sensor_dict(mi, camera, eye, target, up, spp):
@@ -601,6 +709,7 @@ def main():
 
     mi.set_variant(args.variant)
     register_phong(mi, dr)
+    register_principled(mi, dr)
     if args.variant.startswith("llvm"):
         dr.set_thread_count(args.threads)
     try:

@@ -499,9 +499,9 @@ fn parameter(m: &serde_json::Value, key: &str, i: usize) -> f64 {
 /// An MTL of Blender's export is read as the principled BSDF it was written from, as its glTF
 /// export is: the default material (`Ns 250`: roughness 0.5, `Ks 0.5`: a 4 % coat) is diffuse
 /// with its `Kd` (it was a 38 % Phong lobe), and a metallic one (`illum 3`, `Ka 1`: metallic
-/// 1; `Ns 360`: roughness 0.4) a glossy metal of its base colour (it was a perfect mirror of
-/// `Ks`), with one line saying so; a smooth one (`Ns 810`: roughness 0.1) is a plastic with a
-/// 4 % lobe.
+/// 1; `Ns 360`: roughness 0.4) a principled metal of its base colour (it was a perfect mirror
+/// of `Ks`), with one line saying so; a smooth one (`Ns 810`: roughness 0.1) a principled
+/// dielectric (a 4 % lobe).
 #[test]
 fn a_blender_mtl_is_read_as_its_principled_bsdf() {
     let header = "# Blender 4.2.0 MTL File: 'None'\n# www.blender.org\n\n";
@@ -515,10 +515,10 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
     assert_eq!(white["type"], "diffuse", "{white}");
     assert!((parameter(white, "kd", 0) - 0.8).abs() < 1e-6, "{white}");
     let gold = material(&list, "b");
-    assert_eq!(gold["type"], "glossy", "{gold}");
-    assert!(parameter(gold, "kd", 0) == 0.0 && (parameter(gold, "ks", 1) - 0.7).abs() < 1e-6, "{gold}");
-    // Roughness 1 - sqrt(0.36) = 0.4: ns = 2 / 0.4⁴ - 2.
-    assert!((parameter(gold, "ns", 0) - (2.0 / 0.4f64.powi(4) - 2.0)).abs() < 0.01, "{gold}");
+    assert_eq!(gold["type"], "principled", "{gold}");
+    assert!((parameter(gold, "kd", 1) - 0.7).abs() < 1e-6 && parameter(gold, "metallic", 0) == 1.0, "{gold}");
+    // Roughness 1 - sqrt(0.36) = 0.4.
+    assert!((parameter(gold, "roughness", 0) - 0.4).abs() < 1e-4, "{gold}");
     let note = "written by Blender: its materials are read as Blender's principled BSDF";
     assert_eq!(err.matches(note).count(), 1, "{err}");
     assert!(!err.contains("exceeds 1"), "{err}");
@@ -528,12 +528,9 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
         blender("b", 0.0, "1 1 1", 1)
     ));
     let smooth = material(&list, "a");
-    assert_eq!(smooth["type"], "glossy", "{smooth}");
-    assert!(
-        (parameter(smooth, "ks", 0) - 0.04).abs() < 1e-6
-            && (parameter(smooth, "kd", 2) - 0.96 * 0.6).abs() < 1e-6
-    );
-    assert!(parameter(smooth, "ns", 0) >= 1e4 - 1.0, "{smooth}");
+    assert_eq!(smooth["type"], "principled", "{smooth}");
+    assert!(parameter(smooth, "metallic", 0) == 0.0 && (parameter(smooth, "kd", 2) - 0.6).abs() < 1e-6);
+    assert!((parameter(smooth, "roughness", 0) - 0.1).abs() < 1e-4, "{smooth}");
     assert_eq!(material(&list, "b")["type"], "diffuse");
     // With its PBR option Blender writes `Pr` and `Pm` too, which say a metal of specular 0
     // (written `illum 1`) is one.
@@ -543,12 +540,12 @@ fn a_blender_mtl_is_read_as_its_principled_bsdf() {
         blender("b", 0.0, "1 1 1", 1)
     );
     let (list, err) = mtl_materials(&pbr);
-    assert_eq!(material(&list, "a")["type"], "glossy", "{err}");
+    assert_eq!(material(&list, "a")["type"], "principled", "{err}");
 }
 
 /// An MTL with the PBR extension's roughness and metallic values (`Pr`, `Pm`) is read by them
-/// as a glTF material is, from any program: a metal of roughness 0.3 is a glossy metal of its
-/// `Kd` with `ns` = 2/0.3⁴ − 2, a rough dielectric (`Pr 0.7`) is diffuse; neither value is
+/// as a glTF material is, from any program: a metal of roughness 0.3 is a principled metal of
+/// its `Kd`, a rough dielectric (`Pr 0.7`) is diffuse; neither value is
 /// warned as not rendered, while the extension's sheen (`Ps`) still is.
 #[test]
 fn an_mtl_with_pr_and_pm_is_read_as_metallic_roughness() {
@@ -556,9 +553,9 @@ fn an_mtl_with_pr_and_pm_is_read_as_metallic_roughness() {
                newmtl b\nKd 0.3 0.5 0.7\nKs 0.5 0.5 0.5\nNs 100\nillum 2\nPr 0.7\nPm 0\nPs 0.5\n";
     let (list, err) = mtl_materials(mtl);
     let metal = material(&list, "a");
-    assert_eq!(metal["type"], "glossy", "{metal}");
-    assert!((parameter(metal, "ks", 1) - 0.6).abs() < 1e-6, "{metal}");
-    assert!((parameter(metal, "ns", 0) - (2.0 / 0.3f64.powi(4) - 2.0)).abs() < 0.05, "{metal}");
+    assert_eq!(metal["type"], "principled", "{metal}");
+    assert!((parameter(metal, "kd", 1) - 0.6).abs() < 1e-6, "{metal}");
+    assert!((parameter(metal, "roughness", 0) - 0.3).abs() < 1e-4, "{metal}");
     assert_eq!(material(&list, "b")["type"], "diffuse");
     assert!(err.contains("m.mtl:16: material b: Ps (MTL's PBR extension) not rendered"), "{err}");
     assert!(!err.contains("Pr") && !err.contains("Pm"), "{err}");

@@ -447,17 +447,12 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     });
     let s = triangles(d, "materials", materials, extra);
     let grey = (((188.0f64 / 255.0 + 0.055) / 1.055).powf(2.4)) as f32;
-    let ns = |r: f32| photonmap::scene::phong_exponent(r);
-    assert!((ns(0.5) - 30.0).abs() < 1e-3 && (ns(0.3) - (2.0 / 0.3f32.powi(4) - 2.0)).abs() < 1e-2);
     let by_name = |n: &str| s.materials[s.material_names.iter().position(|m| m == n).unwrap()];
     let base = Vec3::new(0.9, 0.8, 0.7);
     assert_eq!(by_name("mirror"), Material::Mirror { ks: base });
-    assert_eq!(by_name("metal"), Material::Glossy { kd: Vec3::ZERO, ks: base, ns: ns(0.5) });
+    assert_eq!(by_name("metal"), Material::principled(base, 1.0, 0.5));
     let colour = Vec3::new(0.5, 0.25, 1.0);
-    assert_eq!(
-        by_name("plastic"),
-        Material::Glossy { kd: colour * 0.96, ks: Vec3::splat(0.04), ns: ns(0.3) }
-    );
+    assert_eq!(by_name("plastic"), Material::principled(colour, 0.0, 0.3));
     assert_eq!(by_name("matte"), Material::Diffuse { kd: colour });
     assert_eq!(by_name("glass"), Material::Glass { ior: 1.33 });
     match by_name("lamp") {
@@ -541,21 +536,21 @@ fn the_metallic_roughness_texture_decides_each_texels_material() {
         let prim = s.tri_material.iter().position(|&m| m as usize == id(name)).unwrap() as u32;
         s.material_at(prim, glam::Vec2::new(u, 0.5))
     };
-    let (base, ns) = (Vec3::new(0.5, 0.4, 0.3), photonmap::scene::phong_exponent);
-    let plastic = |ns: f32| Material::Glossy { kd: 0.96 * base, ks: Vec3::splat(0.04), ns };
-    let metal = |ns: f32| Material::Glossy { kd: Vec3::ZERO, ks: base, ns };
+    let base = Vec3::new(0.5, 0.4, 0.3);
+    let plastic = |rough: f32| Material::principled(base, 0.0, rough);
+    let metal = |rough: f32| Material::principled(base, 1.0, rough);
     // The factors alone make "parts" a rough metal, as every texel was drawn before.
-    assert_eq!(s.materials[id("parts")], metal(0.0));
+    assert_eq!(s.materials[id("parts")], metal(1.0));
     assert_eq!(at("parts", 0.125), Material::Diffuse { kd: base });
-    assert_eq!(at("parts", 0.375), plastic(ns(51.0 / 255.0)));
-    assert_eq!(at("parts", 0.625), metal(ns(153.0 / 255.0)));
+    assert_eq!(at("parts", 0.375), plastic(51.0 / 255.0));
+    assert_eq!(at("parts", 0.625), metal(153.0 / 255.0));
     // Roughness 0 where the factors do not make a mirror: the sharpest lobe (the scene finds its
     // mirrors, which caustics are aimed at, by the material).
-    assert_eq!(at("parts", 0.875), metal(photonmap::scene::MAX_NS));
+    assert_eq!(at("parts", 0.875), metal(0.0));
     // roughnessFactor 0: every texel polished; the metal ones mirrors, as the material is.
     assert_eq!(s.materials[id("chrome")], Material::Mirror { ks: base });
     assert_eq!(at("chrome", 0.625), Material::Mirror { ks: base });
-    assert_eq!(at("chrome", 0.125), plastic(photonmap::scene::MAX_NS));
+    assert_eq!(at("chrome", 0.125), plastic(0.0));
     let r = RenderSettings { integrator: Some(IntegratorKind::Photon), ..settings() };
     render_checked(&s, &r, 8);
     // A scene file that sets the material's constants takes it over: the texture is set aside.

@@ -444,7 +444,7 @@ impl<A: Accel> Shading<'_, '_, A> {
         }
         // What the maps estimate: the Lambertian part alone where the lobe is traced (nothing
         // for a metal).
-        let diffuse_part = lobes.map(|(kd, _)| Material::Diffuse { kd });
+        let diffuse_part = lobes.map(|(diffuse, _)| diffuse);
         if diffuse_part.is_some_and(|d| d.albedo() == Vec3::ZERO) {
             return l;
         }

@@ -44,7 +44,7 @@ use crate::frame::specular::{through_lobe, walk, Landing, Start, GLOSSY_DEPTH};
 use crate::frame::SurfaceHit;
 use crate::frame::{Counters, Frame, Part, Progress};
 use crate::geometry::Ray;
-use crate::material::{face_forward, Material};
+use crate::material::face_forward;
 use crate::photon::footprint::{Footprint, CLEAR};
 use crate::photon::kdtree::Neighbor;
 use crate::photon::map::{GatherParams, PhotonMap, PhotonMaps, GUESS_MARGIN};
@@ -288,10 +288,10 @@ pub(super) fn visible_point<'s, A: Accel>(
     let count = |c: &mut Counters| c.rays.specular += 1;
     let mut v = walk(frame, Start::Traced(ray, hit), Vec3::ONE, cfg.max_depth, rng, c, count, |_, _| {})?;
     for _ in 0..GLOSSY_DEPTH {
-        let Some((kd, lobe)) = v.m.sharp_lobe() else { break };
-        let q = v.m.diffuse_share();
+        let Some((diffuse, lobe)) = v.m.sharp_lobe() else { break };
+        let q = v.m.diffuse_share(v.hit.normals().about(v.wo), v.wo);
         if rng.gen::<f32>() < q {
-            return Some(Landing { m: Material::Diffuse { kd }, beta: v.beta / q, ..v });
+            return Some(Landing { m: diffuse, beta: v.beta / q, ..v });
         }
         v = through_lobe(frame, &v, &lobe, 1.0 / (1.0 - q), cfg.max_depth, rng, c, count).1?;
     }

@@ -141,7 +141,10 @@ mod tests {
             Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.5), ns: 300.0 }.sharp_lobe().unwrap();
         assert_eq!(
             (kd, lobe),
-            (Vec3::splat(0.3), Material::Glossy { kd: Vec3::ZERO, ks: Vec3::splat(0.5), ns: 300.0 })
+            (
+                Material::Diffuse { kd: Vec3::splat(0.3) },
+                Material::Glossy { kd: Vec3::ZERO, ks: Vec3::splat(0.5), ns: 300.0 }
+            )
         );
         assert!(Material::Glossy { kd: Vec3::splat(0.3), ks: Vec3::splat(0.5), ns: 60.0 }
             .sharp_lobe()

@@ -20,6 +20,7 @@ mod diffuse;
 mod glass;
 mod glossy;
 mod mirror;
+mod principled;
 mod shading;
 #[cfg(test)]
 mod testutil;
@@ -28,6 +29,7 @@ pub use diffuse::DiffuseBsdf;
 pub use glass::{fresnel_dielectric, refract, GlassBsdf};
 pub use glossy::GlossyBsdf;
 pub use mirror::MirrorBsdf;
+pub use principled::{Parts, PrincipledBsdf, MIN_ALPHA};
 pub use shading::{Normals, Scattered};
 
 use glam::Vec3;
@@ -39,6 +41,11 @@ use glam::Vec3;
 /// `ns = k`, the two-pass gathers' default of 100, less than about one photon.
 pub const SHARP_NS: f32 = 100.0;
 
+/// The GGX width below which a principled material's lobe is sharp: the one whose Phong
+/// exponent by the Beckmann–Phong correspondence, `2 / α² − 2`, is [`SHARP_NS`] (`√(2 / 102)`;
+/// glTF roughness 0.374).
+pub const SHARP_ALPHA: f32 = 0.140_028;
+
 /// What a surface does with light.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Material {
@@ -46,6 +53,10 @@ pub enum Material {
     Diffuse { kd: Vec3 },
     /// `kd / pi` plus an energy-conserving normalised Phong lobe `ks (n + 2) / (2 pi) cos^n`.
     Glossy { kd: Vec3, ks: Vec3, ns: f32 },
+    /// glTF's metallic-roughness material: a GGX lobe with Schlick's Fresnel over a Lambertian
+    /// base ([`PrincipledBsdf`]; `alpha` = roughness², at least [`MIN_ALPHA`]); made by
+    /// [`Material::principled`].
+    Principled { base: Vec3, metallic: f32, alpha: f32, parts: Parts },
     /// Perfect specular reflection with reflectance `ks`.
     Mirror { ks: Vec3 },
     /// Smooth dielectric with index `ior` inside, 1 outside; exact Fresnel, no absorption.
@@ -131,6 +142,20 @@ fn channel_or_max(c: Vec3, channel: Option<usize>) -> f32 {
 }
 
 impl Material {
+    /// glTF's metallic-roughness material of base colour `base`, metallic value `metallic` and
+    /// roughness `roughness` (each clamped to `[0, 1]`; `α = roughness²`, at least
+    /// [`MIN_ALPHA`]).
+    pub fn principled(base: Vec3, metallic: f32, roughness: f32) -> Material {
+        let unit = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+        let r = unit(roughness);
+        Material::Principled {
+            base: base.clamp(Vec3::ZERO, Vec3::ONE),
+            metallic: unit(metallic),
+            alpha: (r * r).max(MIN_ALPHA),
+            parts: Parts::Both,
+        }
+    }
+
     /// Radiance emitted from the front face, zero for non-emitters.
     pub fn emission(&self) -> Vec3 {
         match *self {
@@ -164,26 +189,36 @@ impl Material {
         }
     }
 
-    /// A glossy material's two lobes apart, where its Phong lobe is sharp (`ns` above
-    /// [`SHARP_NS`]): the Lambertian part's albedo `kd` and the Phong lobe alone (`kd` zero,
-    /// which [`Material::sample`] then always picks); `None` for any other kind, a glossy one
-    /// without a lobe (`ks` zero) or a wider one.
+    /// A glossy or principled material's two parts apart, where its lobe is sharp (Phong `ns`
+    /// above [`SHARP_NS`], GGX `α` below [`SHARP_ALPHA`]): the Lambertian part (`Diffuse`) and
+    /// the lobe alone (which [`Material::sample`] then always picks); `None` for any other
+    /// kind, one without a lobe or a wider one.
     #[inline]
-    pub fn sharp_lobe(&self) -> Option<(Vec3, Material)> {
+    pub fn sharp_lobe(&self) -> Option<(Material, Material)> {
         match *self {
             Material::Glossy { kd, ks, ns } if ks.max_element() > 0.0 && ns > SHARP_NS => {
-                Some((kd, Material::Glossy { kd: Vec3::ZERO, ks, ns }))
+                Some((Material::Diffuse { kd }, Material::Glossy { kd: Vec3::ZERO, ks, ns }))
+            }
+            Material::Principled { base, metallic, alpha, parts: Parts::Both } if alpha < SHARP_ALPHA => {
+                let kd = PrincipledBsdf { base, metallic, alpha, parts: Parts::Both }.kd();
+                Some((
+                    Material::Diffuse { kd },
+                    Material::Principled { base, metallic, alpha, parts: Parts::LobeOnly },
+                ))
             }
             _ => None,
         }
     }
 
-    /// The probability that [`Material::sample`] picks a glossy material's Lambertian part
-    /// (one for any other kind).
+    /// The probability that [`Material::sample`] from `wo` picks a glossy or principled
+    /// material's Lambertian part (one for any other kind; `n` on the side of `wo` or not).
     #[inline]
-    pub fn diffuse_share(&self) -> f32 {
+    pub fn diffuse_share(&self, n: Vec3, wo: Vec3) -> f32 {
         match *self {
             Material::Glossy { kd, ks, ns } => 1.0 - GlossyBsdf { kd, ks, ns }.specular_probability(),
+            Material::Principled { base, metallic, alpha, parts } => {
+                1.0 - PrincipledBsdf { base, metallic, alpha, parts }.lobe_probability(n.dot(wo).abs())
+            }
             _ => 1.0,
         }
     }
@@ -193,17 +228,22 @@ impl Material {
     pub fn is_diffuse_like(&self) -> bool {
         match *self {
             Material::Diffuse { .. } | Material::Emissive { .. } => true,
-            Material::Glossy { .. } => true,
+            Material::Glossy { .. } | Material::Principled { .. } => true,
             Material::Mirror { .. } | Material::Glass { .. } => false,
         }
     }
 
     /// Directional-hemispherical reflectance at normal incidence, per channel: `kd`, `kd + ks`,
-    /// `ks`, one for glass (reflection plus transmission, no absorption).
+    /// `ks`, one for glass (reflection plus transmission, no absorption); for a principled
+    /// material its diffuse albedo plus `F0` (the lobe's masking left out: a bound).
     pub fn albedo(&self) -> Vec3 {
         match *self {
             Material::Diffuse { kd } | Material::Emissive { kd, .. } => kd,
             Material::Glossy { kd, ks, .. } => kd + ks,
+            Material::Principled { base, metallic, alpha, parts } => {
+                let b = PrincipledBsdf { base, metallic, alpha, parts };
+                b.kd() + b.f0()
+            }
             Material::Mirror { ks } => ks,
             Material::Glass { .. } => Vec3::ONE,
         }
@@ -217,6 +257,9 @@ impl Material {
                 DiffuseBsdf { kd }.eval(face_forward(n, wo), wo, wi)
             }
             Material::Glossy { kd, ks, ns } => GlossyBsdf { kd, ks, ns }.eval(face_forward(n, wo), wo, wi),
+            Material::Principled { base, metallic, alpha, parts } => {
+                PrincipledBsdf { base, metallic, alpha, parts }.eval(face_forward(n, wo), wo, wi)
+            }
             Material::Mirror { .. } | Material::Glass { .. } => Vec3::ZERO,
         }
     }
@@ -228,6 +271,9 @@ impl Material {
                 DiffuseBsdf { kd }.pdf(face_forward(n, wo), wo, wi)
             }
             Material::Glossy { kd, ks, ns } => GlossyBsdf { kd, ks, ns }.pdf(face_forward(n, wo), wo, wi),
+            Material::Principled { base, metallic, alpha, parts } => {
+                PrincipledBsdf { base, metallic, alpha, parts }.pdf(face_forward(n, wo), wo, wi)
+            }
             Material::Mirror { .. } | Material::Glass { .. } => 0.0,
         }
     }
@@ -254,6 +300,9 @@ impl Material {
             Material::Glossy { kd, ks, ns } => {
                 GlossyBsdf { kd, ks, ns }.sample(face_forward(n, wo), wo, u_lobe, u)
             }
+            Material::Principled { base, metallic, alpha, parts } => {
+                PrincipledBsdf { base, metallic, alpha, parts }.sample(face_forward(n, wo), wo, u_lobe, u)
+            }
             Material::Mirror { ks } => MirrorBsdf { ks }.sample(face_forward(n, wo), wo),
             Material::Glass { ior } => GlassBsdf { ior }.sample(n, wo, u_lobe, mode),
         }
@@ -263,13 +312,15 @@ impl Material {
     /// `1 - p_diffuse - p_specular` (Jensen 2001, 5.2). With `Some(ch)` they come from that
     /// channel's reflectances (one photon map per channel); with `None` (RGB photons) from the
     /// maximum over channels. "Diffuse" means any non-delta bounce (the photon is stored before
-    /// it): Diffuse/Emissive `(kd, 0)`; Glossy `(kd + ks, 0)` — the Phong lobe is non-delta, so it
+    /// it): Diffuse/Emissive `(kd, 0)`; Glossy `(kd + ks, 0)` and principled `(kd + F0, 0)` — the Phong lobe is non-delta, so it
     /// shares the diffuse branch and [`Material::sample`] then picks kd vs ks itself; Mirror
     /// `(0, ks)`; Glass `(0, 1)` (no absorption; Fresnel picks reflect vs refract).
     pub fn photon_probabilities(&self, channel: Option<usize>) -> (f32, f32) {
         let (d, s) = match *self {
             Material::Diffuse { kd } | Material::Emissive { kd, .. } => (channel_or_max(kd, channel), 0.0),
-            Material::Glossy { kd, ks, .. } => (channel_or_max(kd + ks, channel), 0.0),
+            Material::Glossy { .. } | Material::Principled { .. } => {
+                (channel_or_max(self.albedo(), channel), 0.0)
+            }
             Material::Mirror { ks } => (0.0, channel_or_max(ks, channel)),
             Material::Glass { .. } => (0.0, 1.0),
         };

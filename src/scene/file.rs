@@ -178,6 +178,7 @@ impl<'de> Deserialize<'de> for Rotate {
 pub enum MaterialKind {
     Diffuse,
     Glossy,
+    Principled,
     Mirror,
     Glass,
     Emissive,
@@ -192,6 +193,9 @@ pub struct MaterialEntry {
     pub kd: Option<[f32; 3]>,
     pub ks: Option<[f32; 3]>,
     pub ns: Option<f32>,
+    /// A principled material's metallic value and roughness (glTF's; its base colour is `kd`).
+    pub metallic: Option<f32>,
+    pub roughness: Option<f32>,
     pub ior: Option<f32>,
     pub ke: Option<[f32; 3]>,
     /// An image for `kd` (relative to the scene file), replacing the MTL's `map_Kd`.

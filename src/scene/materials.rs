@@ -160,6 +160,17 @@ fn material(
             }
             Material::Glossy { kd, ks, ns }
         }
+        MaterialKind::Principled => {
+            let unit = |f: &str, v: Option<f32>, default: f32| match v {
+                Some(x) if !(0.0..=1.0).contains(&x) => {
+                    Err(SceneError::field(path, field(f), format!("{x} is not in [0, 1]")))
+                }
+                v => Ok(v.unwrap_or(default)),
+            };
+            let metallic = unit("metallic", e.metallic.or(mtl.metallic), 0.0)?;
+            let roughness = unit("roughness", e.roughness.or(mtl.roughness), 0.5)?;
+            Material::principled(reflectance3(path, &field("kd"), kd)?, metallic, roughness)
+        }
         MaterialKind::Mirror => {
             let ks = if e.ks.is_none() && mtl.ks.is_none() { [1.0; 3] } else { ks };
             Material::Mirror { ks: reflectance3(path, &field("ks"), ks)? }
@@ -212,7 +223,8 @@ fn mtl_warnings(name: &str, mtl: &MtlMaterial, typed: bool, warnings: &mut Vec<S
 }
 
 /// The MTL mapping: `Ke` → emissive; `illum 3/5` → mirror; `illum 4/6/7` → glass; `illum 2`
-/// with `Ks` and `Ns` → glossy; otherwise diffuse.
+/// with a roughness (`Pr`, or one [`read_principled`] found) → principled; `illum 2` with `Ks`
+/// and `Ns` → glossy; otherwise diffuse.
 fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
     let nonzero = |v: Option<[f32; 3]>| v.is_some_and(|v| v.iter().any(|&x| x > 0.0));
     if nonzero(m.ke) {
@@ -221,6 +233,7 @@ fn mtl_kind(m: &MtlMaterial) -> MaterialKind {
     match m.illum {
         Some(3) | Some(5) => MaterialKind::Mirror,
         Some(4) | Some(6) | Some(7) => MaterialKind::Glass,
+        Some(2) if m.roughness.is_some() => MaterialKind::Principled,
         Some(2) if nonzero(m.ks) && m.ns.is_some() => MaterialKind::Glossy,
         _ => MaterialKind::Diffuse,
     }
@@ -251,23 +264,6 @@ impl TextureRef {
     }
 }
 
-/// The highest Phong exponent a glTF roughness maps to.
-pub const MAX_NS: f32 = 1e4;
-
-/// The Phong exponent of glTF roughness `r`: `2/α² − 2` with `α = r²` (Walter et al. 2007's
-/// Beckmann–Phong correspondence, with Disney's / glTF's `α = roughness²`), in [0, 10⁴].
-pub fn phong_exponent(r: f32) -> f32 {
-    let alpha = r.clamp(0.0, 1.0).powi(2);
-    if alpha <= 0.0 {
-        return MAX_NS;
-    }
-    (2.0 / (alpha * alpha) - 2.0).clamp(0.0, MAX_NS)
-}
-
-/// The specular albedo of a glTF dielectric ([`MetalRoughKind::Plastic`]): 4 % (glTF's F0 for
-/// non-metals); its diffuse albedo is the base colour times the rest.
-pub const PLASTIC_KS: f32 = 0.04;
-
 /// What a glTF metallic-roughness material (neither emissive nor transmissive) is drawn as,
 /// by its metallic and roughness values (README, "glTF 2.0"): the glTF loader picks one from
 /// the factors, [`MetalRough`] one per texel of a `metallicRoughnessTexture`.
@@ -275,35 +271,48 @@ pub const PLASTIC_KS: f32 = 0.04;
 pub enum MetalRoughKind {
     /// Metallic ≥ 0.5, roughness 0: `mirror`, `ks` = base colour.
     Mirror,
-    /// Metallic ≥ 0.5: `glossy`, `kd` = 0, `ks` = base colour, `ns` from the roughness.
-    Metal,
-    /// Metallic < 0.5, roughness < 0.5: `glossy`, `kd` = 0.96 base colour, `ks` = 0.04.
-    Plastic,
-    /// Metallic < 0.5, roughness ≥ 0.5: `diffuse`, `kd` = base colour.
+    /// Metallic ≥ 0.5, or roughness < 0.5: `principled` (GGX, Schlick's Fresnel on the base
+    /// colour by the metallic value, over 96 % of the base colour diffusely by the rest).
+    Principled,
+    /// Metallic < 0.5, roughness ≥ 0.5: `diffuse`, `kd` = base colour (its 4 % lobe, as wide
+    /// as a diffuse one, is not drawn).
     Matte,
 }
 
 impl MetalRoughKind {
-    /// The MTL fields a material of this kind is drawn from, for base colour `base` (in
-    /// [0, 1]) and roughness `rough`: `illum`, `Kd`, `Ks` and `Ns` (the table above; the
-    /// fields a kind does not read are zero).
-    pub fn mtl_fields(self, base: Vec3, rough: f32) -> (u8, [f32; 3], [f32; 3], f32) {
-        let ns = phong_exponent(rough);
-        match self {
-            MetalRoughKind::Mirror => (3, [0.0; 3], base.to_array(), ns),
-            MetalRoughKind::Metal => (2, [0.0; 3], base.to_array(), ns),
-            MetalRoughKind::Plastic => (2, (base * (1.0 - PLASTIC_KS)).to_array(), [PLASTIC_KS; 3], ns),
-            MetalRoughKind::Matte => (1, base.to_array(), [0.0; 3], ns),
-        }
-    }
-
     pub fn of(metal: f32, rough: f32) -> MetalRoughKind {
         match (metal >= 0.5, rough) {
             (true, r) if r <= 0.0 => MetalRoughKind::Mirror,
-            (true, _) => MetalRoughKind::Metal,
-            (false, r) if r < 0.5 => MetalRoughKind::Plastic,
-            (false, _) => MetalRoughKind::Matte,
+            (false, r) if r >= 0.5 => MetalRoughKind::Matte,
+            _ => MetalRoughKind::Principled,
         }
+    }
+
+    /// The material of this kind for base colour `base` (in [0, 1]), metallic value `metal`
+    /// and roughness `rough`.
+    pub fn material(self, base: Vec3, metal: f32, rough: f32) -> Material {
+        match self {
+            MetalRoughKind::Mirror => Material::Mirror { ks: base },
+            MetalRoughKind::Principled => Material::principled(base, metal, rough),
+            MetalRoughKind::Matte => Material::Diffuse { kd: base },
+        }
+    }
+
+    /// Writes a material of this kind into the MTL fields the scene's materials read it from
+    /// (`mtl_kind`): the base colour as `Kd` (`Ks` for the mirror), `illum`, and for a
+    /// principled one the roughness and metallic values as the PBR extension's `Pr` and `Pm`.
+    /// Whether the base colour's map is the `ks` map (the mirror's) is returned.
+    pub fn write_mtl(self, mtl: &mut MtlMaterial, base: Vec3, metal: f32, rough: f32) -> bool {
+        let base = base.clamp(Vec3::ZERO, Vec3::ONE).to_array();
+        (mtl.kd, mtl.ks, mtl.ns, mtl.roughness, mtl.metallic) = (Some(base), None, None, None, None);
+        match self {
+            MetalRoughKind::Mirror => (mtl.illum, mtl.kd, mtl.ks) = (Some(3), None, Some(base)),
+            MetalRoughKind::Principled => {
+                (mtl.illum, mtl.roughness, mtl.metallic) = (Some(2), Some(rough), Some(metal));
+            }
+            MetalRoughKind::Matte => mtl.illum = Some(1),
+        }
+        self == MetalRoughKind::Mirror
     }
 }
 
@@ -338,18 +347,12 @@ fn read_principled(mtl: &MtlMaterial) -> Option<MtlMaterial> {
     // Read: not among the extension's constants warned as not rendered.
     mtl.lines.remove("Pr");
     mtl.lines.remove("Pm");
-    let base = Vec3::from(mtl.kd.unwrap_or([0.8; 3])).clamp(Vec3::ZERO, Vec3::ONE);
-    let kind = MetalRoughKind::of(metal, rough);
-    let (illum, kd, ks, ns) = kind.mtl_fields(base, rough);
-    (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(illum), Some(kd), Some(ks), Some(ns));
-    // The base colour's map: the metal's `ks`, the plastic's diffuse part or the matte colour.
+    let base = Vec3::from(mtl.kd.unwrap_or([0.8; 3]));
+    let on_ks = MetalRoughKind::of(metal, rough).write_mtl(&mut mtl, base, metal, rough);
+    // The base colour's map: the mirror's `ks`, otherwise the base colour (`kd`).
     mtl.maps.retain(|m| m.keyword != "map_ks");
-    for m in mtl.maps.iter_mut().filter(|m| m.keyword == "map_kd") {
-        match kind {
-            MetalRoughKind::Mirror | MetalRoughKind::Metal => m.keyword = "map_ks".to_string(),
-            MetalRoughKind::Plastic => m.factor = 1.0 - PLASTIC_KS,
-            MetalRoughKind::Matte => {}
-        }
+    for m in mtl.maps.iter_mut().filter(|m| m.keyword == "map_kd" && on_ks) {
+        m.keyword = "map_ks".to_string();
     }
     Some(mtl)
 }
@@ -384,12 +387,9 @@ impl MetalRough {
         let t = self.texture.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE);
         let (metal, rough) = (t.z, t.y);
         let base = self.base_texture.map_or(self.base, |b| b.rgb(textures, uv)).clamp(Vec3::ZERO, Vec3::ONE);
-        let (illum, kd, ks, ns) = MetalRoughKind::of(metal, rough).mtl_fields(base, rough);
-        let (kd, ks) = (Vec3::from(kd), Vec3::from(ks));
-        match illum {
-            3 if m.is_specular() => Material::Mirror { ks },
-            2 | 3 => Material::Glossy { kd, ks, ns },
-            _ => Material::Diffuse { kd },
+        match MetalRoughKind::of(metal, rough) {
+            MetalRoughKind::Mirror if !m.is_specular() => Material::principled(base, metal, rough),
+            kind => kind.material(base, metal, rough),
         }
     }
 }
@@ -481,6 +481,9 @@ impl MaterialMaps {
                 let (kd, ks) = (albedo(self.kd, kd), albedo(self.ks, ks));
                 let over = (kd + ks).max(Vec3::ONE);
                 Material::Glossy { kd: kd / over, ks: ks / over, ns }
+            }
+            Material::Principled { base, metallic, alpha, parts } => {
+                Material::Principled { base: albedo(self.kd, base), metallic, alpha, parts }
             }
             Material::Mirror { ks } => Material::Mirror { ks: albedo(self.ks, ks) },
             Material::Glass { .. } => m,
@@ -644,7 +647,13 @@ fn texture_maps(
             maps.metal_rough = None;
         }
     }
-    let uses_kd = matches!(m, Material::Diffuse { .. } | Material::Glossy { .. } | Material::Emissive { .. });
+    let uses_kd = matches!(
+        m,
+        Material::Diffuse { .. }
+            | Material::Glossy { .. }
+            | Material::Principled { .. }
+            | Material::Emissive { .. }
+    );
     let uses_ks = matches!(m, Material::Glossy { .. } | Material::Mirror { .. });
     let kind = format!("{m:?}");
     let kind = kind.split_whitespace().next().unwrap_or("").to_lowercase();

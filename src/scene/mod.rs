@@ -19,10 +19,7 @@ pub use error::{one_line, SceneError};
 pub use file::{
     CameraEntries, CameraEntry, KeyEntry, LightEntry, MaterialEntry, MaterialKind, SceneFile, TurntableEntry,
 };
-pub use materials::{
-    phong_exponent, AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
-    MAX_NS,
-};
+pub use materials::{AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF};
 pub use obj::{MtlMap, MtlMaterial};
 
 use crate::config::RenderSettings;

@@ -204,6 +204,10 @@ fn material_parameters(m: &Material) -> (&'static str, Vec<(&'static str, Vec<f3
     match *m {
         Material::Diffuse { kd } => ("diffuse", vec![("kd", v(kd))]),
         Material::Glossy { kd, ks, ns } => ("glossy", vec![("kd", v(kd)), ("ks", v(ks)), ("ns", vec![ns])]),
+        Material::Principled { base, metallic, alpha, .. } => (
+            "principled",
+            vec![("kd", v(base)), ("metallic", vec![metallic]), ("roughness", vec![alpha.sqrt()])],
+        ),
         Material::Mirror { ks } => ("mirror", vec![("ks", v(ks))]),
         Material::Glass { ior } => ("glass", vec![("ior", vec![ior])]),
         Material::Emissive { kd, ke } => ("emissive", vec![("kd", v(kd)), ("ke", v(ke))]),

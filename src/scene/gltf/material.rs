@@ -21,7 +21,7 @@
 //! MASK at 0.5, warned. Textures not rendered are named in the warnings.
 
 use super::super::materials::{
-    AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF, PLASTIC_KS,
+    AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
 };
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
@@ -290,15 +290,10 @@ pub fn material(
         }
     } else {
         maps.metal_rough = metal_rough.map(|texture| MetalRough { texture, base, base_texture: base_map });
-        let kind = MetalRoughKind::of(metal, rough);
-        let (illum, kd, ks, ns) = kind.mtl_fields(base.clamp(Vec3::ZERO, Vec3::ONE), rough);
-        (mtl.illum, mtl.kd, mtl.ks, mtl.ns) = (Some(illum), Some(kd), Some(ks), Some(ns));
-        match kind {
-            MetalRoughKind::Mirror | MetalRoughKind::Metal => maps.ks = base_map,
-            MetalRoughKind::Plastic => {
-                maps.kd = base_map.map(|t| TextureRef { factor: t.factor * (1.0 - PLASTIC_KS), ..t });
-            }
-            MetalRoughKind::Matte => maps.kd = base_map,
+        if MetalRoughKind::of(metal, rough).write_mtl(&mut mtl, base, metal, rough) {
+            maps.ks = base_map;
+        } else {
+            maps.kd = base_map;
         }
     }
     if base.max_element() > 1.0 || base.min_element() < 0.0 {
@@ -308,17 +303,4 @@ pub fn material(
         );
     }
     Ok((mtl, maps))
-}
-
-#[cfg(test)]
-mod tests {
-    use crate::scene::{phong_exponent, MAX_NS};
-
-    #[test]
-    fn roughness_to_phong() {
-        assert_eq!(phong_exponent(1.0), 0.0);
-        assert_eq!(phong_exponent(0.0), MAX_NS);
-        assert!((phong_exponent(0.5) - 30.0).abs() < 1e-4);
-        assert!(phong_exponent(0.3) > phong_exponent(0.4));
-    }
 }
