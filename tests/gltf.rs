@@ -561,8 +561,7 @@ fn the_metallic_roughness_texture_decides_each_texels_material() {
     assert!(s.maps[parts].metal_rough.is_none());
     let warnings = s.warnings.join("\n");
     assert!(
-        warnings
-            .contains("materials.parts.type is given, so the glTF's metallicRoughnessTexture is not used"),
+        warnings.contains("materials.parts.type is given, so the material's roughness and metallic textures"),
         "{warnings}"
     );
 }

@@ -340,3 +340,34 @@ fn the_scene_files_normal_texture_is_the_mtls_norm() {
     let e = Scene::load(dir.path().join("s.toml")).unwrap_err().to_string();
     assert!(e.contains("materials.floor.bump_texture"), "{e}");
 }
+
+/// MTL's PBR maps (`map_Pr`, `map_Pm`: their red channel, linear) replace `Pr` and `Pm` texel
+/// by texel, as glTF's `metallicRoughnessTexture` does: a polished metal texel is a principled
+/// metal, a rough dielectric one diffuse, the base colour `Kd` (times `map_Kd`) on both. They
+/// were warned as not rendered, and the whole surface drawn with the constants.
+#[test]
+fn mtl_pbr_maps_decide_each_texels_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Left texel: roughness 0.2, metallic 1; right: roughness 0.8, metallic 0.
+    image::GrayImage::from_fn(2, 1, |x, _| image::Luma([if x == 0 { 51 } else { 204 }]))
+        .save(d.join("r.png"))
+        .unwrap();
+    image::GrayImage::from_fn(2, 1, |x, _| image::Luma([if x == 0 { 255 } else { 0 }]))
+        .save(d.join("m.png"))
+        .unwrap();
+    let mtl = "newmtl furnace\nKd 0.9 0.6 0.2\nPr 0.5\nPm 0\nillum 2\nmap_Pr r.png\nmap_Pm m.png\n";
+    let s = furnace(d, mtl);
+    assert!(s.warnings.iter().all(|w| !w.contains("map_P")), "{:?}", s.warnings);
+    let at = |u: f32| s.material_at(0, glam::Vec2::new(u, 0.5));
+    let base = Vec3::new(0.9, 0.6, 0.2);
+    assert_eq!(at(0.25), photonmap::material::Material::principled(base, 1.0, 51.0 / 255.0));
+    assert_eq!(at(0.75), photonmap::material::Material::Diffuse { kd: base });
+    // Without `Pr` or `Pm`, `map_Pr` alone makes the material principled.
+    let s = furnace(d, "newmtl furnace\nKd 0.9 0.6 0.2\nillum 2\nmap_Pr r.png\n");
+    assert_eq!(
+        s.material_at(0, glam::Vec2::new(0.25, 0.5)),
+        photonmap::material::Material::principled(base, 0.0, 51.0 / 255.0)
+    );
+    render_checked(&s, &settings(), 8);
+}

@@ -304,12 +304,12 @@ impl MetalRoughKind {
     /// Whether the base colour's map is the `ks` map (the mirror's) is returned.
     pub fn write_mtl(self, mtl: &mut MtlMaterial, base: Vec3, metal: f32, rough: f32) -> bool {
         let base = base.clamp(Vec3::ZERO, Vec3::ONE).to_array();
-        (mtl.kd, mtl.ks, mtl.ns, mtl.roughness, mtl.metallic) = (Some(base), None, None, None, None);
+        (mtl.kd, mtl.ks, mtl.ns) = (Some(base), None, None);
+        // Kept for every kind: roughness and metallic maps decide the kind texel by texel.
+        (mtl.roughness, mtl.metallic) = (Some(rough), Some(metal));
         match self {
-            MetalRoughKind::Mirror => (mtl.illum, mtl.kd, mtl.ks) = (Some(3), None, Some(base)),
-            MetalRoughKind::Principled => {
-                (mtl.illum, mtl.roughness, mtl.metallic) = (Some(2), Some(rough), Some(metal));
-            }
+            MetalRoughKind::Mirror => (mtl.illum, mtl.ks) = (Some(3), Some(base)),
+            MetalRoughKind::Principled => mtl.illum = Some(2),
             MetalRoughKind::Matte => mtl.illum = Some(1),
         }
         self == MetalRoughKind::Mirror
@@ -330,7 +330,8 @@ impl MetalRoughKind {
 /// keep the MTL mapping.
 fn read_principled(mtl: &MtlMaterial) -> Option<MtlMaterial> {
     let emits = mtl.ke.is_some_and(|k| k.iter().any(|&x| x > 0.0));
-    let by_pbr = mtl.roughness.is_some() && mtl.illum.is_none_or(|i| i <= 3);
+    let pr_map = mtl.maps.iter().any(|m| m.keyword == "map_pr");
+    let by_pbr = (mtl.roughness.is_some() || pr_map) && mtl.illum.is_none_or(|i| i <= 3);
     // Blender writes `illum 1` where the specular value is 0: diffuse as read.
     let by_blender = mtl.blender && matches!(mtl.illum, Some(2) | Some(3));
     if emits || !(by_pbr || by_blender) {
@@ -344,6 +345,7 @@ fn read_principled(mtl: &MtlMaterial) -> Option<MtlMaterial> {
     }
     .clamp(0.0, 1.0);
     let mut mtl = mtl.clone();
+    mtl.principled = true;
     // Read: not among the extension's constants warned as not rendered.
     mtl.lines.remove("Pr");
     mtl.lines.remove("Pm");
@@ -363,34 +365,77 @@ fn blender_roughness(ns: Option<f32>) -> f32 {
     ns.map_or(0.5, |ns| 1.0 - (ns.clamp(0.0, 1000.0) / 1000.0).sqrt())
 }
 
-/// A glTF `metallicRoughnessTexture` (linear; blue the metallic value, green the roughness,
-/// times the material's factors) with the base colour: the material at each texel is what
-/// [`MetalRoughKind`] makes of that texel's values, so the metal parts of a model are drawn
-/// as metal and the rest as the plastic or matte surface the texture says. A texel is drawn as
-/// a mirror only where the material's factors make it one too (the scene's analysis finds its
-/// specular surfaces, for caustics, by the material, not by the texel); elsewhere a roughness
-/// of 0 is the sharpest glossy lobe ([`MAX_NS`]).
+/// A roughness or metallic value over a surface: a constant, or one channel of a linear
+/// texture times the factor the texture reference holds in that channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scalar {
+    Constant(f32),
+    Texel { texture: TextureRef, channel: usize },
+}
+
+impl Scalar {
+    #[inline]
+    fn at(&self, textures: &Textures, uv: Vec2) -> f32 {
+        match *self {
+            Scalar::Constant(x) => x,
+            Scalar::Texel { texture, channel } => texture.rgb(textures, uv)[channel],
+        }
+    }
+
+    /// The texture read, if any.
+    pub fn texture(&self) -> Option<TextureRef> {
+        match *self {
+            Scalar::Constant(_) => None,
+            Scalar::Texel { texture, .. } => Some(texture),
+        }
+    }
+}
+
+/// A material whose roughness or metallic value varies over the surface (glTF's
+/// `metallicRoughnessTexture`: linear, blue the metallic value, green the roughness, times the
+/// factors; MTL's `map_Pr` and `map_Pm`: their red channel), with its base colour: the
+/// material at each texel is what [`MetalRoughKind`] makes of that texel's values, so the metal
+/// parts of a model are drawn as metal and the rest as the plastic or matte surface the
+/// textures say. A texel is drawn as a mirror only where the material's constants make it one
+/// too (the scene's analysis finds its specular surfaces, for caustics, by the material, not by
+/// the texel); elsewhere a roughness of 0 is the sharpest lobe
+/// ([`MIN_ALPHA`](crate::material::MIN_ALPHA)).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MetalRough {
-    /// The texture, its factor `(0, roughnessFactor, metallicFactor)`.
-    pub texture: TextureRef,
-    /// `baseColorFactor`'s colour.
+    pub roughness: Scalar,
+    pub metallic: Scalar,
+    /// The base colour (`baseColorFactor`'s, or `Kd`).
     pub base: Vec3,
-    /// `baseColorTexture`, its factor `baseColorFactor`'s colour.
+    /// `baseColorTexture`, its factor `baseColorFactor`'s colour (or `map_Kd`).
     pub base_texture: Option<TextureRef>,
 }
 
 impl MetalRough {
-    /// The material at `uv` of a material whose factors alone make it `m`.
+    /// The material at `uv` of a material whose constants alone make it `m`.
     #[inline]
     pub fn at(&self, m: Material, textures: &Textures, uv: Vec2) -> Material {
-        let t = self.texture.rgb(textures, uv).clamp(Vec3::ZERO, Vec3::ONE);
-        let (metal, rough) = (t.z, t.y);
+        let (metal, rough) = match (self.metallic, self.roughness) {
+            // glTF's one texture for both: read once.
+            (Scalar::Texel { texture: a, channel: i }, Scalar::Texel { texture: b, channel: j })
+                if a == b =>
+            {
+                let t = a.rgb(textures, uv);
+                (t[i], t[j])
+            }
+            (metal, rough) => (metal.at(textures, uv), rough.at(textures, uv)),
+        };
+        let (metal, rough) = (metal.clamp(0.0, 1.0), rough.clamp(0.0, 1.0));
         let base = self.base_texture.map_or(self.base, |b| b.rgb(textures, uv)).clamp(Vec3::ZERO, Vec3::ONE);
         match MetalRoughKind::of(metal, rough) {
             MetalRoughKind::Mirror if !m.is_specular() => Material::principled(base, metal, rough),
             kind => kind.material(base, metal, rough),
         }
+    }
+
+    /// The textures it reads, each once.
+    pub fn textures(&self) -> impl Iterator<Item = TextureRef> {
+        let (r, m) = (self.roughness.texture(), self.metallic.texture());
+        r.into_iter().chain(m.filter(|m| Some(*m) != r))
     }
 }
 
@@ -533,8 +578,14 @@ fn texture_maps(
             factor: Vec3::splat(map.factor),
         })
     };
+    let principled = mtl.filter(|m| m.principled);
+    let (mut pr, mut pm) = (None, None);
     for map in mtl.map_or(&[][..], |m| &m.maps[..]) {
         match map.keyword.as_str() {
+            "map_pr" | "map_pm" if principled.is_some() => {
+                let t = Some(from_mtl(map, textures, warnings, Encoding::Data)?);
+                *(if map.keyword == "map_pr" { &mut pr } else { &mut pm }) = t;
+            }
             "map_kd" => maps.kd = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "map_ks" => maps.ks = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
             "map_ke" => maps.ke = Some(from_mtl(map, textures, warnings, Encoding::Colour)?),
@@ -567,6 +618,18 @@ fn texture_maps(
                 map.line
             )),
         }
+    }
+    // MTL's PBR maps, their red channel, replace the constants `Pr` and `Pm`.
+    if let Some(p) = principled.filter(|_| pr.is_some() || pm.is_some()) {
+        let scalar = |t: Option<TextureRef>, constant: f32| {
+            t.map_or(Scalar::Constant(constant), |texture| Scalar::Texel { texture, channel: 0 })
+        };
+        maps.metal_rough = Some(MetalRough {
+            roughness: scalar(pr, p.roughness.unwrap_or(0.5)),
+            metallic: scalar(pm, p.metallic.unwrap_or(0.0)),
+            base: Vec3::from(p.kd.or(p.ks).unwrap_or([0.8; 3])),
+            base_texture: maps.kd.or(maps.ks),
+        });
     }
     let from_file = |field: &str, file: &Path, textures: &mut Textures, encoding: Encoding| {
         let texture = textures
@@ -636,12 +699,14 @@ fn texture_maps(
             ("kd", e.kd.is_some()),
             ("ks", e.ks.is_some()),
             ("ns", e.ns.is_some()),
+            ("metallic", e.metallic.is_some()),
+            ("roughness", e.roughness.is_some()),
             ("kd_texture", e.kd_texture.is_some()),
             ("ks_texture", e.ks_texture.is_some()),
         ];
         if let Some((field, _)) = set.iter().find(|(_, given)| *given) {
             warnings.push(format!(
-                "{}: materials.{name}.{field} is given, so the glTF's metallicRoughnessTexture is not used",
+                "{}: materials.{name}.{field} is given, so the material's roughness and metallic textures (glTF's metallicRoughnessTexture, MTL's map_Pr and map_Pm) are not used",
                 path.display()
             ));
             maps.metal_rough = None;

@@ -34,6 +34,9 @@ pub struct MtlMaterial {
     /// `Ka` are a principled BSDF's roughness, specular and metallic values
     /// (read so by the scene's materials, `materials.rs`).
     pub blender: bool,
+    /// Whether the scene's materials read it as a principled BSDF (`read_principled` in
+    /// `materials.rs`): its `Pr`, `Pm` and their maps are then its roughness and metallic.
+    pub principled: bool,
 }
 
 /// One texture statement of an MTL file: `map_Kd -s 2 2 wood.png`.
@@ -110,6 +113,7 @@ pub fn load_obj(path: &Path) -> Result<ObjData, SceneError> {
                 file: mtl_path.clone(),
                 lines: lines.remove(&m.name).unwrap_or_default(),
                 blender,
+                principled: false,
             };
             if !materials.iter().any(|(n, _)| *n == m.name) {
                 materials.push((m.name, mtl));

@@ -133,6 +133,7 @@ impl SceneInfo {
             .zip(counts)
             .map(|(((name, m), maps), triangles)| {
                 let file = |t: TextureRef| scene.textures.get(t.texture).path.display().to_string();
+                let mr = maps.metal_rough;
                 let slots = [
                     ("kd", maps.kd),
                     ("ks", maps.ks),
@@ -140,7 +141,8 @@ impl SceneInfo {
                     ("normal", maps.normal),
                     ("bump", maps.bump),
                     ("alpha", maps.alpha.map(|a| a.texture)),
-                    ("metallic_roughness", maps.metal_rough.map(|m| m.texture)),
+                    ("roughness", mr.and_then(|m| m.roughness.texture())),
+                    ("metallic", mr.and_then(|m| m.metallic.texture())),
                 ];
                 let textures = slots.into_iter().filter_map(|(slot, t)| Some((slot, file(t?)))).collect();
                 let (kind, parameters) = material_parameters(m);

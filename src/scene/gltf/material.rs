@@ -21,7 +21,7 @@
 //! MASK at 0.5, warned. Textures not rendered are named in the warnings.
 
 use super::super::materials::{
-    AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, TextureRef, DEFAULT_ALPHA_CUTOFF,
+    AlphaMap, MaterialMaps, MetalRough, MetalRoughKind, Scalar, TextureRef, DEFAULT_ALPHA_CUTOFF,
 };
 use super::super::obj::MtlMaterial;
 use super::super::SceneError;
@@ -289,7 +289,12 @@ pub fn material(
             );
         }
     } else {
-        maps.metal_rough = metal_rough.map(|texture| MetalRough { texture, base, base_texture: base_map });
+        maps.metal_rough = metal_rough.map(|texture| MetalRough {
+            roughness: Scalar::Texel { texture, channel: 1 },
+            metallic: Scalar::Texel { texture, channel: 2 },
+            base,
+            base_texture: base_map,
+        });
         if MetalRoughKind::of(metal, rough).write_mtl(&mut mtl, base, metal, rough) {
             maps.ks = base_map;
         } else {
