@@ -124,7 +124,8 @@ def parse_obj(path):
             continue
         key = w[0]
         if key == "v":
-            if len(w) not in (4, 5, 7):
+            if len(w) not in (4, 5):
+                # (v x y z r g b: vertex colours, which multiply the base colour, are not reproduced)
                 raise Refused(f"{path}:{lineno}: vertex with {len(w) - 1} numbers")
             v.append([float(x) for x in w[1:4]])
         elif key == "vt":

@@ -284,7 +284,7 @@ impl Texture {
 }
 
 /// The sRGB decoding of a value in `[0, 1]`.
-fn srgb_decode(c: f32) -> f32 {
+pub fn srgb_decode(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {

@@ -469,6 +469,7 @@ fn materials_map_as_the_readme_says_and_the_rest_is_warned() {
     match s.material_at(
         s.tri_material.iter().position(|&m| m as usize == lamp).unwrap() as u32,
         glam::Vec2::ZERO,
+        Vec3::ONE,
     ) {
         Material::Emissive { ke, .. } => {
             assert!((ke - Vec3::new(4.0, 2.0, 1.0) * grey).length() < 1e-5, "{ke}")
@@ -534,7 +535,7 @@ fn the_metallic_roughness_texture_decides_each_texels_material() {
     let id = |name: &str| s.material_names.iter().position(|m| m == name).unwrap();
     let at = |name: &str, u: f32| {
         let prim = s.tri_material.iter().position(|&m| m as usize == id(name)).unwrap() as u32;
-        s.material_at(prim, glam::Vec2::new(u, 0.5))
+        s.material_at(prim, glam::Vec2::new(u, 0.5), Vec3::ONE)
     };
     let base = Vec3::new(0.5, 0.4, 0.3);
     let plastic = |rough: f32| Material::principled(base, 0.0, rough);
@@ -767,4 +768,36 @@ fn a_gltf_alone_without_camera_or_lights_is_framed_and_lit_by_a_white_sky() {
     assert_eq!(px(0, 0), Vec3::ONE);
     let centre = px(8, 8);
     assert!(centre.max_element() < 0.95 && centre.min_element() > 0.05, "the box at the centre: {centre}");
+}
+
+/// glTF's vertex colours (`COLOR_0`, linear, RGB or RGBA) multiply the base colour, as the
+/// specification says: a grey material whose vertices are orange is orange where they are,
+/// blended across the triangle. They were not read: the model was drawn grey.
+#[test]
+fn vertex_colours_multiply_the_base_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut g = Gltf::default();
+    let tri = [Vec3::new(0.0, 0.0, -2.0), Vec3::new(1.0, 0.0, -2.0), Vec3::new(0.0, 1.0, -2.0)];
+    let mut prim = g.primitive(&tri, None, &[[0, 1, 2]], 0);
+    // RGBA: the alpha is not read.
+    let rgba = [1.0, 0.5, 0.25, 0.3, 0.0, 1.0, 0.0, 1.0, 1.0, 0.5, 0.25, 1.0];
+    prim["attributes"]["COLOR_0"] = json!(g.floats(&rgba, 4, "VEC4"));
+    let top = json!({
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "translation": [0.0, 0.0, 1.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.1}}],
+        "meshes": [{"primitives": [prim]}],
+        "materials": [{"name": "grey", "pbrMetallicRoughness":
+            {"baseColorFactor": [0.8, 0.8, 0.8, 1.0], "metallicFactor": 0.0, "roughnessFactor": 1.0}}],
+    });
+    let s = Scene::load(g.write(d, "coloured", top)).unwrap();
+    let corner = s.attributes.at([0, 1, 2], 0.0, 0.0).colour;
+    assert_eq!(corner, Vec3::new(1.0, 0.5, 0.25));
+    let between = s.attributes.at([0, 1, 2], 0.5, 0.0).colour;
+    assert!((between - Vec3::new(0.5, 0.75, 0.125)).length() < 1e-6, "{between}");
+    let m = s.material_at(0, glam::Vec2::ZERO, corner);
+    assert_eq!(m, Material::Diffuse { kd: Vec3::new(0.8, 0.4, 0.2) });
+    let r = RenderSettings { integrator: Some(IntegratorKind::Photon), ..settings() };
+    render_checked(&s, &r, 8);
 }

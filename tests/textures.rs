@@ -359,15 +359,43 @@ fn mtl_pbr_maps_decide_each_texels_material() {
     let mtl = "newmtl furnace\nKd 0.9 0.6 0.2\nPr 0.5\nPm 0\nillum 2\nmap_Pr r.png\nmap_Pm m.png\n";
     let s = furnace(d, mtl);
     assert!(s.warnings.iter().all(|w| !w.contains("map_P")), "{:?}", s.warnings);
-    let at = |u: f32| s.material_at(0, glam::Vec2::new(u, 0.5));
+    let at = |u: f32| s.material_at(0, glam::Vec2::new(u, 0.5), Vec3::ONE);
     let base = Vec3::new(0.9, 0.6, 0.2);
     assert_eq!(at(0.25), photonmap::material::Material::principled(base, 1.0, 51.0 / 255.0));
     assert_eq!(at(0.75), photonmap::material::Material::Diffuse { kd: base });
     // Without `Pr` or `Pm`, `map_Pr` alone makes the material principled.
     let s = furnace(d, "newmtl furnace\nKd 0.9 0.6 0.2\nillum 2\nmap_Pr r.png\n");
     assert_eq!(
-        s.material_at(0, glam::Vec2::new(0.25, 0.5)),
+        s.material_at(0, glam::Vec2::new(0.25, 0.5), Vec3::ONE),
         photonmap::material::Material::principled(base, 0.0, 51.0 / 255.0)
     );
     render_checked(&s, &settings(), 8);
+}
+
+/// OBJ vertex colours (`v x y z r g b`, sRGB-decoded as 8-bit textures are) multiply the
+/// diffuse colour: the white furnace (`Kd 1`, `Ke 1`) whose every vertex is coloured 0.5 is
+/// the furnace of `kd` = 0.214, `1 / (1 − 0.214)` everywhere. They were read and dropped.
+#[test]
+fn obj_vertex_colours_multiply_the_diffuse_colour() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mtl = "newmtl furnace\nKd 1 1 1\nKe 1 1 1\n";
+    std::fs::write(d.join("cube.mtl"), mtl).unwrap();
+    let coloured: String = cube_obj("cube.mtl", "furnace")
+        .lines()
+        .map(|l| if l.starts_with("v ") { format!("{l} 0.5 0.5 0.5\n") } else { format!("{l}\n") })
+        .collect();
+    std::fs::write(d.join("cube.obj"), coloured).unwrap();
+    std::fs::write(d.join("s.toml"), FURNACE_TOML).unwrap();
+    let s = Scene::load(d.join("s.toml")).unwrap();
+    assert!(s.attributes.has_colours() && s.textured);
+    let kd = ((0.5f64 + 0.055) / 1.055).powf(2.4);
+    let exact = 1.0 / (1.0 - kd);
+    let mean = render_checked(&s, &settings(), 16).film.mean();
+    assert!((mean / exact - 1.0).abs() < 0.01, "mean {mean}, exact {exact}");
+    // A colour outside [0, 1] is refused, naming the line.
+    let bad = cube_obj("cube.mtl", "furnace").replacen("v -1 -1 -1", "v -1 -1 -1 2 0 0", 1);
+    std::fs::write(d.join("cube.obj"), bad).unwrap();
+    let err = Scene::load(d.join("s.toml")).err().unwrap().to_string();
+    assert!(err.contains("cube.obj:") && err.contains("vertex colour values must be in [0, 1]"), "{err}");
 }

@@ -246,7 +246,7 @@ pub fn direct_light_with<A: Accel>(
                     }
                     if s.scene.textured {
                         // An emission texture varies it.
-                        le = s.scene.material_at(y.prim, y.uv).emitted(y.n, -bs.wi);
+                        le = s.scene.material_at(y.prim, y.uv, y.colour).emitted(y.n, -bs.wi);
                     }
                     (le, s.lights.pdf_li_hit(hit.p, y.prim, y.p, y.n))
                 }

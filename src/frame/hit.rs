@@ -19,6 +19,9 @@ pub struct SurfaceHit {
     pub ns: Vec3,
     /// Texture coordinates (zero where the mesh has none).
     pub uv: Vec2,
+    /// The vertex colour, which multiplies the material's base colour (white where the mesh
+    /// has none).
+    pub colour: Vec3,
     /// Where rays leaving on the shading normal's side start from: `p` lifted onto the smooth
     /// surface the vertex normals describe (Hanika, "Hacking the shadow terminator", Ray
     /// Tracing Gems II, 2021), or `p` itself on a flat triangle or where the lift would go
@@ -92,12 +95,22 @@ impl SurfaceHit {
     #[inline]
     pub fn new(scene: &Scene, hit: Hit) -> Option<SurfaceHit> {
         let (n, p, err) = scene.mesh.surface_point(hit.prim, hit.u, hit.v)?;
-        let mut at = SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, lifted: p, prim: hit.prim, t: hit.t };
+        let mut at = SurfaceHit {
+            p,
+            err,
+            n,
+            ns: n,
+            uv: Vec2::ZERO,
+            colour: Vec3::ONE,
+            lifted: p,
+            prim: hit.prim,
+            t: hit.t,
+        };
         let a = &scene.attributes;
-        if a.has_normals() || a.has_uvs() {
+        if a.has_normals() || a.has_uvs() || a.has_colours() {
             let tri = scene.mesh.indices[hit.prim as usize];
             let s = a.at(tri, hit.u, hit.v);
-            at.uv = s.uv;
+            (at.uv, at.colour) = (s.uv, s.colour);
             // A shading normal behind the surface (vertex normals bent past the face) is no
             // use: that point is shaded flat.
             if let Some(ns) = s.normal.filter(|ns| ns.dot(n) > 0.0) {
@@ -128,7 +141,7 @@ impl SurfaceHit {
     /// A point on a flat surface (no shading normal, no texture coordinates).
     #[inline]
     pub fn flat(p: Vec3, err: Vec3, n: Vec3) -> SurfaceHit {
-        SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, lifted: p, prim: 0, t: 0.0 }
+        SurfaceHit { p, err, n, ns: n, uv: Vec2::ZERO, colour: Vec3::ONE, lifted: p, prim: 0, t: 0.0 }
     }
 
     /// The geometric and shading normals, for the BSDF.

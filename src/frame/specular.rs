@@ -88,7 +88,7 @@ pub fn walk<'s, A: Accel>(
             visit(Seen::Sky { dir: ray.dir.normalize() }, beta);
             return None;
         };
-        let m = frame.scene.material_at(hit.prim, hit.uv);
+        let m = frame.scene.material_at(hit.prim, hit.uv, hit.colour);
         let wo = -ray.dir.normalize();
         visit(Seen::Surface { hit: &hit, wo, m: &m }, beta);
         if !m.is_specular() {

@@ -164,7 +164,7 @@ fn trace_radiance<A: Accel>(
             }
             break;
         };
-        let m = &s.scene.material_at(hit.prim, hit.uv);
+        let m = &s.scene.material_at(hit.prim, hit.uv, hit.colour);
         let wo = -ray.dir.normalize();
 
         // Emission reached by the camera ray or by the previous vertex's BSDF sample.

@@ -156,6 +156,21 @@ impl Material {
         }
     }
 
+    /// The material with its base colour multiplied by `c` (a vertex colour): the albedo of
+    /// diffuse, glossy and emissive materials, the base colour of a principled one; mirrors
+    /// and glass are left as they are.
+    pub fn tinted(&self, c: Vec3) -> Material {
+        match *self {
+            Material::Diffuse { kd } => Material::Diffuse { kd: kd * c },
+            Material::Emissive { kd, ke } => Material::Emissive { kd: kd * c, ke },
+            Material::Glossy { kd, ks, ns } => Material::Glossy { kd: kd * c, ks, ns },
+            Material::Principled { base, metallic, alpha, parts } => {
+                Material::Principled { base: (base * c).min(Vec3::ONE), metallic, alpha, parts }
+            }
+            Material::Mirror { .. } | Material::Glass { .. } => *self,
+        }
+    }
+
     /// Radiance emitted from the front face, zero for non-emitters.
     pub fn emission(&self) -> Vec3 {
         match *self {

@@ -542,7 +542,7 @@ fn trace_photon<A: Accel>(
         let Some(hit) = hit else { break };
         let Some(at) = SurfaceHit::new(scene, hit) else { break };
         let (p, err, n) = (at.p, at.err, at.n);
-        let m = &scene.material_at(hit.prim, at.uv);
+        let m = &scene.material_at(hit.prim, at.uv, at.colour);
         let wo = -ray.dir.normalize();
         if m.is_diffuse_like() {
             match pass {

@@ -570,13 +570,7 @@ fn texture_maps(
             ));
         }
         let wrap = if map.clamp { Wrap::Clamp } else { Wrap::Repeat };
-        Ok(TextureRef {
-            texture,
-            scale: map.scale,
-            offset: map.offset,
-            wrap,
-            factor: Vec3::splat(map.factor),
-        })
+        Ok(TextureRef { texture, scale: map.scale, offset: map.offset, wrap, factor: Vec3::ONE })
     };
     let principled = mtl.filter(|m| m.principled);
     let (mut pr, mut pm) = (None, None);

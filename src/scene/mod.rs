@@ -61,7 +61,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Each material's texture maps (indexed like `materials`).
     pub maps: Vec<MaterialMaps>,
-    /// Whether any material has a texture (if not, [`Scene::material_at`] is a lookup).
+    /// Whether any material has a texture or any vertex a colour (if not, [`Scene::material_at`]
+    /// is a lookup).
     pub textured: bool,
     pub textures: Textures,
     pub material_names: Vec<String>,
@@ -209,6 +210,8 @@ impl Scene {
                 "textures are used but no mesh has texture coordinates (OBJ vt, glTF TEXCOORD_0): each shows one colour".into(),
             );
         }
+        // Vertex colours vary the materials as textures do.
+        let textured = textured || attributes.has_colours();
         let mut lights: Vec<LightDesc> =
             file.lights.iter().enumerate().map(|(i, l)| light(path, i, l)).collect::<Result<Vec<_>, _>>()?;
         lights.extend(gltf_lights);
@@ -300,19 +303,21 @@ impl Scene {
         &self.materials[self.tri_material[prim as usize] as usize]
     }
 
-    /// The material of triangle `prim` at texture coordinates `uv`, its textures looked up.
+    /// The material of triangle `prim` at texture coordinates `uv`, its textures looked up,
+    /// its base colour times the vertex colour `colour`.
     #[inline]
-    pub fn material_at(&self, prim: u32, uv: Vec2) -> Material {
+    pub fn material_at(&self, prim: u32, uv: Vec2, colour: Vec3) -> Material {
         let id = self.tri_material[prim as usize] as usize;
         let m = self.materials[id];
         if !self.textured {
             return m;
         }
         let maps = &self.maps[id];
-        if maps.is_empty() {
+        let m = if maps.is_empty() { m } else { maps.apply(m, &self.textures, uv) };
+        if colour == Vec3::ONE {
             m
         } else {
-            maps.apply(m, &self.textures, uv)
+            m.tinted(colour)
         }
     }
 

@@ -4,6 +4,7 @@
 
 use super::SceneError;
 use crate::geometry::{TriangleMesh, VertexAttributes};
+use crate::texture::srgb_decode;
 use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -57,9 +58,6 @@ pub struct MtlMap {
     pub clamp: bool,
     /// `-bm m` of a `bump`/`map_Bump`: the height map's texels are multiplied by this (default 1).
     pub bump_multiplier: f32,
-    /// A colour map's texels are multiplied by this (1 as written; a Blender plastic's base
-    /// colour map is its diffuse part, 0.96 of it).
-    pub factor: f32,
     /// Options read but not applied (`-mm`, `-bm` of a map other than a bump map, ...), by name.
     pub ignored: Vec<String>,
 }
@@ -166,6 +164,8 @@ struct Parsed {
 /// `usemtl` a material.
 fn parse_obj(path: &Path, text: &str) -> Result<Parsed, SceneError> {
     let mut v: Vec<Vec3> = Vec::new();
+    // Each `v`'s colour, where it has one (`v x y z r g b`).
+    let mut vc: Vec<Option<Vec3>> = Vec::new();
     let mut vt: Vec<Vec2> = Vec::new();
     let mut vn: Vec<Vec3> = Vec::new();
     // Faces as corner lists; each corner (v, vt, vn), u32::MAX where absent.
@@ -196,8 +196,15 @@ fn parse_obj(path: &Path, text: &str) -> Result<Parsed, SceneError> {
                     )));
                 }
                 let xyz = finite_numbers(&nums[..3], "vertex coordinate").map_err(&bad)?;
-                finite_numbers(&nums[3..], "vertex w or colour").map_err(&bad)?;
+                let rest = finite_numbers(&nums[3..], "vertex w or colour").map_err(&bad)?;
                 v.push(Vec3::from_slice(&xyz));
+                vc.push(match rest[..] {
+                    [r, g, b] if [r, g, b].iter().all(|x| (0.0..=1.0).contains(x)) => {
+                        Some(Vec3::new(r, g, b).map(srgb_decode))
+                    }
+                    [_, _, _] => return Err(bad("vertex colour values must be in [0, 1]".into())),
+                    _ => None,
+                });
             }
             "vt" | "vn" => {
                 let need = if keyword == "vt" { 2 } else { 3 };
@@ -274,7 +281,7 @@ fn parse_obj(path: &Path, text: &str) -> Result<Parsed, SceneError> {
     if face_starts.is_empty() {
         return Err(SceneError::file(path, "no faces: the OBJ holds no triangles"));
     }
-    Ok(assemble(&v, &vt, &vn, &corners, &face_starts, runs, libraries))
+    Ok(assemble(&v, &vc, &vt, &vn, &corners, &face_starts, runs, libraries))
 }
 
 /// Parses finite numbers, or says which word is not one (`what` names a non-finite one).
@@ -290,8 +297,10 @@ fn finite_numbers(words: &[&str], what: &str) -> Result<Vec<f32>, String> {
 }
 
 /// Fans the faces into triangles over one vertex per distinct corner.
+#[allow(clippy::too_many_arguments)] // the statements read, each list as parsed
 fn assemble(
     v: &[Vec3],
+    vc: &[Option<Vec3>],
     vt: &[Vec2],
     vn: &[Vec3],
     corners: &[[u32; 3]],
@@ -302,6 +311,7 @@ fn assemble(
     const NONE: u32 = u32::MAX;
     let has_uv = corners.iter().any(|c| c[1] != NONE);
     let has_normal = corners.iter().any(|c| c[2] != NONE && vn[c[2] as usize] != Vec3::ZERO);
+    let has_colour = corners.iter().any(|c| vc[c[0] as usize].is_some());
     let mut mesh = TriangleMesh::default();
     let mut attributes = VertexAttributes::default();
     let mut vertex_of: HashMap<[u32; 3], u32> = HashMap::new();
@@ -314,6 +324,9 @@ fn assemble(
             }
             if has_normal {
                 attributes.normals.push(if c[2] == NONE { Vec3::ZERO } else { vn[c[2] as usize] });
+            }
+            if has_colour {
+                attributes.colours.push(vc[c[0] as usize].unwrap_or(Vec3::ONE));
             }
             (mesh.positions.len() - 1) as u32
         })
@@ -469,7 +482,6 @@ fn parse_map(path: &Path, line: usize, keyword: &str, args: &[&str]) -> Result<M
         offset: Vec2::ZERO,
         clamp: false,
         bump_multiplier: 1.0,
-        factor: 1.0,
         ignored: Vec::new(),
     };
     let bump = matches!(map.keyword.as_str(), "bump" | "map_bump");

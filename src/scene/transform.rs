@@ -180,7 +180,7 @@ mod tests {
     /// One triangle (0, 1, 2) at the given positions, every vertex with `normal`.
     fn triangle(p: [Vec3; 3], normal: Vec3) -> (TriangleMesh, VertexAttributes) {
         let mesh = TriangleMesh { positions: p.to_vec(), indices: vec![[0, 1, 2]] };
-        (mesh, VertexAttributes { normals: vec![normal; 3], uvs: Vec::new() })
+        (mesh, VertexAttributes { normals: vec![normal; 3], ..Default::default() })
     }
 
     fn placed(toml: &str, p: [Vec3; 3], normal: Vec3) -> Result<(TriangleMesh, VertexAttributes), String> {

@@ -18,6 +18,8 @@ pub struct SceneInfo {
     /// Vertices with a shading normal (`vn`, glTF `NORMAL`).
     pub vertices_with_normals: usize,
     pub texture_coordinates: bool,
+    /// Whether vertices carry colours (glTF `COLOR_0`, OBJ `v x y z r g b`).
+    pub vertex_colours: bool,
     /// `[min, max]` corners of the mesh's bounding box.
     pub bounds: [[f32; 3]; 2],
     pub textures: Vec<TextureInfo>,
@@ -191,6 +193,7 @@ impl SceneInfo {
             vertices: scene.mesh.positions.len(),
             vertices_with_normals,
             texture_coordinates: a.has_uvs(),
+            vertex_colours: a.has_colours(),
             bounds: [b.min.to_array(), b.max.to_array()],
             textures,
             cameras,
@@ -321,12 +324,13 @@ impl fmt::Display for SceneInfo {
         writeln!(f, "{:<10}{}", "scene", self.scene)?;
         writeln!(
             f,
-            "{:<10}{}, {} ({} with normals), {}",
+            "{:<10}{}, {} ({} with normals), {}{}",
             "geometry",
             plural(self.triangles, "triangle", "triangles"),
             plural(self.vertices, "vertex", "vertices"),
             self.vertices_with_normals,
-            if self.texture_coordinates { "texture coordinates" } else { "no texture coordinates" }
+            if self.texture_coordinates { "texture coordinates" } else { "no texture coordinates" },
+            if self.vertex_colours { ", vertex colours" } else { "" }
         )?;
         let [lo, hi] = &self.bounds;
         let size = [hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]];

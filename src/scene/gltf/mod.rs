@@ -369,6 +369,25 @@ fn add_mesh(
             }
             None => Vec::new(),
         };
+        // Vertex colours (linear, RGB or RGBA: the alpha is not read) multiply the base colour.
+        let colours = match prim.get(&Semantic::Colors(0)) {
+            Some(a) => {
+                let allowed = [DataType::F32, DataType::U8, DataType::U16];
+                let name = attr("COLOR_0");
+                let v: Vec<[f32; 3]> = if a.dimensions() == gltf::accessor::Dimensions::Vec4 {
+                    let rgba = read_floats::<4>(path, &name, buffers, &a, &allowed)?;
+                    rgba.iter().map(|c| [c[0], c[1], c[2]]).collect()
+                } else {
+                    read_floats::<3>(path, &name, buffers, &a, &allowed)?
+                };
+                same_count("COLOR_0", v.len())?;
+                if let Some(c) = v.iter().find(|c| !c.iter().all(|x| x.is_finite() && *x >= 0.0)) {
+                    return Err(at(path, name, format!("colour {c:?} is negative or not finite")));
+                }
+                v
+            }
+            None => Vec::new(),
+        };
         let indices = match prim.indices() {
             Some(a) => read_indices(path, &format!("{f}.indices"), buffers, &a)?,
             None => (0..n as u32).collect(),
@@ -400,6 +419,7 @@ fn add_mesh(
                 .map(|&v| (normal_matrix * Vec3::from(v)).try_normalize().unwrap_or(Vec3::ZERO))
                 .collect(),
             uvs: uvs.iter().map(|&[u, v]| Vec2::new(u, 1.0 - v)).collect(),
+            colours: colours.iter().map(|&c| Vec3::from(c).min(Vec3::ONE)).collect(),
         };
         let material = prim.material().index().map(|i| names[i].clone());
         out.tri_material.extend(std::iter::repeat_n(material, part.len()));
