@@ -681,33 +681,38 @@ def uv_sphere(part, centre, r, n_lat, n_lon):
                 part.quad(a, b, c, d)
 
 
-def glossyroom():
-    # The Cornell room with glossy (normalised Phong) surfaces of the kinds glTF models bring:
-    # a rough gold-like metal block, a blue plastic block (4 % sharp coat), a sharp metal
-    # sphere and a glossy floor, lit by the room's ceiling light.
+def shiny_room(name, desc, shiny, notes):
+    # The Cornell room with a floor, the two blocks and a ball on the short one of the materials
+    # `shiny` names ("floor", "tall", "short", "ball"), lit by the room's ceiling light.
     room = read_cornell_room()
     for p in room:
-        if p.name.startswith("floor"):
-            p.material = "floor"
-        elif "tall" in p.name:
-            p.material = "gold"
-        elif "short" in p.name:
-            p.material = "plastic"
-    ball = Part("ball", "chrome")
+        part = "floor" if p.name.startswith("floor") else "tall" if "tall" in p.name else "short" if "short" in p.name else None
+        if part:
+            p.material = shiny[part][0]
+    ball = Part("ball", shiny["ball"][0])
     uv_sphere(ball, (0.186, 0.165 + 0.0701, 0.169), 0.07, 48, 96)
     check_closed([ball], "ball")
-    parts = room + [ball]
     materials = {
         "white": diffuse(WHITE),
         "red": diffuse(RED),
         "green": diffuse(GREEN),
         "light": emissive((0.78, 0.78, 0.78), (17.0, 12.0, 4.0)),
-        "floor": glossy((0.45, 0.44, 0.42), (0.25, 0.25, 0.25), 30.0),
-        "gold": glossy((0.0, 0.0, 0.0), (0.9, 0.72, 0.4), 60.0),
-        "plastic": glossy((0.1, 0.24, 0.58), (0.04, 0.04, 0.04), 400.0),
-        "chrome": glossy((0.0, 0.0, 0.0), (0.85, 0.85, 0.85), 2000.0),
     }
+    materials.update(dict(shiny.values()))
     camera = {"eye": (0.278, 0.273, -0.8), "target": (0.278, 0.273, 0.0), "vfov_deg": 39.30764811610662}
+    emit(name, desc, room + [ball], materials, camera, (), notes)
+
+
+def glossyroom():
+    # The Cornell room with glossy (normalised Phong) surfaces of the kinds glTF models bring:
+    # a rough gold-like metal block, a blue plastic block (4 % sharp coat), a sharp metal
+    # sphere and a glossy floor, lit by the room's ceiling light.
+    shiny = {
+        "floor": ("floor", glossy((0.45, 0.44, 0.42), (0.25, 0.25, 0.25), 30.0)),
+        "tall": ("gold", glossy((0.0, 0.0, 0.0), (0.9, 0.72, 0.4), 60.0)),
+        "short": ("plastic", glossy((0.1, 0.24, 0.58), (0.04, 0.04, 0.04), 400.0)),
+        "ball": ("chrome", glossy((0.0, 0.0, 0.0), (0.85, 0.85, 0.85), 2000.0)),
+    }
     notes = [
         "room: cornell's as published; floor glossy, tall block rough gold-like metal (kd 0, ns 60), "
         "short block blue plastic (ks 0.04, ns 400), ball: flat 48 x 96 sphere of radius 0.07 m on the "
@@ -715,7 +720,7 @@ def glossyroom():
     ]
     desc = ("the Cornell box with glossy normalised-Phong surfaces: glossy floor, rough metal and "
             "plastic blocks, a sharp metal ball.")
-    emit("glossyroom", desc, parts, materials, camera, (), notes)
+    shiny_room("glossyroom", desc, shiny, notes)
 
 
 def pbrroom():
@@ -723,29 +728,12 @@ def pbrroom():
     # Fresnel), the kinds a glTF model brings: a rough dielectric floor (its lobe estimated from
     # the photons), a rough gold block, a smooth blue plastic block and a polished metal ball
     # (their lobes traced).
-    room = read_cornell_room()
-    for p in room:
-        if p.name.startswith("floor"):
-            p.material = "floor"
-        elif "tall" in p.name:
-            p.material = "gold"
-        elif "short" in p.name:
-            p.material = "plastic"
-    ball = Part("ball", "steel")
-    uv_sphere(ball, (0.186, 0.165 + 0.0701, 0.169), 0.07, 48, 96)
-    check_closed([ball], "ball")
-    parts = room + [ball]
-    materials = {
-        "white": diffuse(WHITE),
-        "red": diffuse(RED),
-        "green": diffuse(GREEN),
-        "light": emissive((0.78, 0.78, 0.78), (17.0, 12.0, 4.0)),
-        "floor": principled((0.6, 0.58, 0.55), 0.0, 0.45),
-        "gold": principled((1.0, 0.78, 0.34), 1.0, 0.5),
-        "plastic": principled((0.1, 0.25, 0.6), 0.0, 0.25),
-        "steel": principled((0.95, 0.93, 0.88), 1.0, 0.15),
+    shiny = {
+        "floor": ("floor", principled((0.6, 0.58, 0.55), 0.0, 0.45)),
+        "tall": ("gold", principled((1.0, 0.78, 0.34), 1.0, 0.5)),
+        "short": ("plastic", principled((0.1, 0.25, 0.6), 0.0, 0.25)),
+        "ball": ("steel", principled((0.95, 0.93, 0.88), 1.0, 0.15)),
     }
-    camera = {"eye": (0.278, 0.273, -0.8), "target": (0.278, 0.273, 0.0), "vfov_deg": 39.30764811610662}
     notes = [
         "room: cornell's as published; floor a rough dielectric (roughness 0.45), tall block rough gold "
         "(metallic 1, roughness 0.5), short block blue plastic (metallic 0, roughness 0.25), ball: flat "
@@ -753,7 +741,7 @@ def pbrroom():
     ]
     desc = ("the Cornell box with glTF metallic-roughness surfaces: rough dielectric floor, rough gold "
             "and smooth plastic blocks, a polished metal ball.")
-    emit("pbrroom", desc, parts, materials, camera, (), notes)
+    shiny_room("pbrroom", desc, shiny, notes)
 
 
 # ---------------------------------------------------------------------------------------------

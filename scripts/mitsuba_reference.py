@@ -364,37 +364,23 @@ def bsdf_dict(m):
     raise Refused(m["type"])
 
 
-def register_phong(mi, dr):
-    """Registers `ours_phong`: src/material/glossy.rs's normalised Phong (Lafortune & Willems
-    1994) as a Mitsuba BSDF, two-sided (both directions mirrored to the side the viewer is on,
-    as ours flips the normal), the lobe picked with probability mean(ks) / (mean(kd) +
-    mean(ks)) and sampled around the mirror direction with density (ns + 1) / (2 pi) cos^ns,
-    samples below the surface rejected; `eval` is f cos, `pdf` the mixture's, as ours."""
+def two_sided_mixture(mi, dr):
+    """The base class of our BSDF plugins: a glossy lobe and a Lambertian part, two-sided (both
+    directions mirrored to the side the viewer is on, as ours flips the normal). A subclass
+    gives `f_pdf(wi, wo)` (f and the mixture's density for local directions on the upper side,
+    wi toward the viewer, wo toward the light) and `draw(wi, sample1, sample2)` (whether the
+    lobe was picked, and the direction); `eval` is f cos, `pdf` the mixture's, as ours."""
     glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
     diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
 
-    class OursPhong(mi.BSDF):
+    class TwoSidedMixture(mi.BSDF):
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
-            kd = [max(props[f"kd_{c}"], 0.0) for c in "rgb"]
-            ks = [max(props[f"ks_{c}"], 0.0) for c in "rgb"]
-            self.kd, self.ks, self.ns = mi.Color3f(*kd), mi.Color3f(*ks), float(props["ns"])
-            self.ps = sum(ks) / (sum(kd) + sum(ks)) if sum(kd) + sum(ks) > 0 else 0.0
             self.m_components = [glossy, diffuse]
             self.m_flags = glossy | diffuse
 
         def side(self, si):
             return dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)
-
-        def f_pdf(self, wi, wo):
-            """f and the mixture's density for local directions on the upper side (wi: toward
-            the viewer, wo: toward the light)."""
-            mirror = mi.Vector3f(-wi.x, -wi.y, wi.z)
-            lobe = dr.power(dr.maximum(dr.dot(mirror, wo), 0.0), self.ns)
-            f = self.kd * dr.inv_pi + self.ks * ((self.ns + 2.0) * 0.5 * dr.inv_pi * lobe)
-            pdf = (1.0 - self.ps) * wo.z * dr.inv_pi + self.ps * (self.ns + 1.0) * 0.5 * dr.inv_pi * lobe
-            valid = (wi.z > 0) & (wo.z > 0)
-            return f, dr.select(valid, pdf, 0.0), valid
 
         def eval_pdf(self, ctx, si, wo, active=True):
             s = self.side(si)
@@ -412,12 +398,7 @@ def register_phong(mi, dr):
         def sample(self, ctx, si, sample1, sample2, active=True):
             s = self.side(si)
             wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s)
-            lobe = sample1 < self.ps
-            cos_a = dr.power(sample2.x, 1.0 / (self.ns + 1.0))
-            sin_a = dr.safe_sqrt(1.0 - cos_a * cos_a)
-            sp, cp = dr.sincos(dr.two_pi * sample2.y)
-            around = mi.Frame3f(mi.Vector3f(-wi.x, -wi.y, wi.z)).to_world(mi.Vector3f(sin_a * cp, sin_a * sp, cos_a))
-            wo = dr.select(lobe, around, mi.warp.square_to_cosine_hemisphere(sample2))
+            lobe, wo = self.draw(wi, sample1, sample2)
             f, pdf, valid = self.f_pdf(wi, wo)
             bs = mi.BSDFSample3f()
             bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * s)
@@ -432,6 +413,39 @@ def register_phong(mi, dr):
         def traverse(self, callback):
             pass
 
+    return TwoSidedMixture
+
+
+def register_phong(mi, dr):
+    """Registers `ours_phong`: src/material/glossy.rs's normalised Phong (Lafortune & Willems
+    1994) as a Mitsuba BSDF, the lobe picked with probability mean(ks) / (mean(kd) + mean(ks))
+    and sampled around the mirror direction with density (ns + 1) / (2 pi) cos^ns, samples
+    below the surface rejected, as ours."""
+
+    class OursPhong(two_sided_mixture(mi, dr)):
+        def __init__(self, props):
+            super().__init__(props)
+            kd = [max(props[f"kd_{c}"], 0.0) for c in "rgb"]
+            ks = [max(props[f"ks_{c}"], 0.0) for c in "rgb"]
+            self.kd, self.ks, self.ns = mi.Color3f(*kd), mi.Color3f(*ks), float(props["ns"])
+            self.ps = sum(ks) / (sum(kd) + sum(ks)) if sum(kd) + sum(ks) > 0 else 0.0
+
+        def f_pdf(self, wi, wo):
+            mirror = mi.Vector3f(-wi.x, -wi.y, wi.z)
+            lobe = dr.power(dr.maximum(dr.dot(mirror, wo), 0.0), self.ns)
+            f = self.kd * dr.inv_pi + self.ks * ((self.ns + 2.0) * 0.5 * dr.inv_pi * lobe)
+            pdf = (1.0 - self.ps) * wo.z * dr.inv_pi + self.ps * (self.ns + 1.0) * 0.5 * dr.inv_pi * lobe
+            valid = (wi.z > 0) & (wo.z > 0)
+            return f, dr.select(valid, pdf, 0.0), valid
+
+        def draw(self, wi, sample1, sample2):
+            lobe = sample1 < self.ps
+            cos_a = dr.power(sample2.x, 1.0 / (self.ns + 1.0))
+            sin_a = dr.safe_sqrt(1.0 - cos_a * cos_a)
+            sp, cp = dr.sincos(dr.two_pi * sample2.y)
+            around = mi.Frame3f(mi.Vector3f(-wi.x, -wi.y, wi.z)).to_world(mi.Vector3f(sin_a * cp, sin_a * sp, cos_a))
+            return lobe, dr.select(lobe, around, mi.warp.square_to_cosine_hemisphere(sample2))
+
         def to_string(self):
             return f"OursPhong[ns={self.ns}, ps={self.ps}]"
 
@@ -439,17 +453,15 @@ def register_phong(mi, dr):
 
 
 def register_principled(mi, dr):
-    """Registers `ours_principled`: src/material/principled.rs's BRDF, two-sided as
-    `ours_phong`: f = kd / pi + F(wi . h) D(h) V, kd = (1 - m) 0.96 base, F Schlick's with F0 =
-    (1 - m) 0.04 + m base rising by m (1 - base) (1 - c)^5, D GGX, V glTF's height-correlated
-    Smith term. The lobe is picked with probability s / (s + d) (s the mean of F at the
-    viewer's cosine, d the mean of kd) and sampled by Mitsuba's GGX visible-normal sampler."""
-    glossy = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
-    diffuse = mi.BSDFFlags.DiffuseReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+    """Registers `ours_principled`: src/material/principled.rs's BRDF: f = kd / pi + F(wi . h)
+    D(h) V, kd = (1 - m) 0.96 base, F Schlick's with F0 = (1 - m) 0.04 + m base rising by m (1 -
+    base) (1 - c)^5, D GGX, V glTF's height-correlated Smith term. The lobe is picked with
+    probability s / (s + d) (s the mean of F at the viewer's cosine, d the mean of kd) and
+    sampled by Mitsuba's GGX visible-normal sampler, not ours."""
 
-    class OursPrincipled(mi.BSDF):
+    class OursPrincipled(two_sided_mixture(mi, dr)):
         def __init__(self, props):
-            mi.BSDF.__init__(self, props)
+            super().__init__(props)
             base = [props[f"base_{c}"] for c in "rgb"]
             m, self.alpha = float(props["metallic"]), float(props["alpha"])
             self.kd = mi.Color3f(*[(1.0 - m) * 0.96 * b for b in base])
@@ -457,11 +469,6 @@ def register_principled(mi, dr):
             self.rise = mi.Color3f(*[m * (1.0 - b) for b in base])
             self.kd_sum = sum((1.0 - m) * 0.96 * b for b in base)
             self.distr = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, self.alpha, True)
-            self.m_components = [glossy, diffuse]
-            self.m_flags = glossy | diffuse
-
-        def side(self, si):
-            return dr.select(mi.Frame3f.cos_theta(si.wi) < 0, -1.0, 1.0)
 
         def fresnel(self, c):
             x = dr.clip(1.0 - c, 0.0, 1.0)
@@ -473,8 +480,6 @@ def register_principled(mi, dr):
             return dr.select(s + self.kd_sum > 0, s / (s + self.kd_sum), 0.0)
 
         def f_pdf(self, wi, wo):
-            """f and the mixture's density for local directions on the upper side (wi: toward
-            the viewer, wo: toward the light)."""
             h = dr.normalize(wi + wo)
             a2 = self.alpha * self.alpha
             root = lambda c: dr.sqrt(c * c * (1.0 - a2) + a2)  # noqa: E731
@@ -486,38 +491,10 @@ def register_principled(mi, dr):
             valid = (wi.z > 0) & (wo.z > 0)
             return f, dr.select(valid, pdf, 0.0), valid
 
-        def eval_pdf(self, ctx, si, wo, active=True):
-            s = self.side(si)
-            wi, wo = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s), mi.Vector3f(wo.x, wo.y, wo.z * s)
-            f, pdf, valid = self.f_pdf(wi, wo)
-            ok = active & valid
-            return dr.select(ok, f * wo.z, 0.0), dr.select(ok, pdf, 0.0)
-
-        def eval(self, ctx, si, wo, active=True):
-            return self.eval_pdf(ctx, si, wo, active)[0]
-
-        def pdf(self, ctx, si, wo, active=True):
-            return self.eval_pdf(ctx, si, wo, active)[1]
-
-        def sample(self, ctx, si, sample1, sample2, active=True):
-            s = self.side(si)
-            wi = mi.Vector3f(si.wi.x, si.wi.y, si.wi.z * s)
+        def draw(self, wi, sample1, sample2):
             lobe = sample1 < self.lobe_probability(wi)
             normal, _ = self.distr.sample(wi, sample2)
-            wo = dr.select(lobe, mi.reflect(wi, normal), mi.warp.square_to_cosine_hemisphere(sample2))
-            f, pdf, valid = self.f_pdf(wi, wo)
-            bs = mi.BSDFSample3f()
-            bs.wo = mi.Vector3f(wo.x, wo.y, wo.z * s)
-            bs.pdf = pdf
-            bs.eta = 1.0
-            bs.sampled_type = dr.select(lobe, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
-                                        mi.UInt32(+mi.BSDFFlags.DiffuseReflection))
-            bs.sampled_component = dr.select(lobe, mi.UInt32(0), mi.UInt32(1))
-            ok = active & valid & (pdf > 0)
-            return bs, dr.select(ok, f * wo.z / pdf, 0.0)
-
-        def traverse(self, callback):
-            pass
+            return lobe, dr.select(lobe, mi.reflect(wi, normal), mi.warp.square_to_cosine_hemisphere(sample2))
 
         def to_string(self):
             return f"OursPrincipled[alpha={self.alpha}]"
