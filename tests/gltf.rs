@@ -801,3 +801,47 @@ fn vertex_colours_multiply_the_base_colour() {
     let r = RenderSettings { integrator: Some(IntegratorKind::Photon), ..settings() };
     render_checked(&s, &r, 8);
 }
+
+/// `KHR_texture_transform`'s offset and scale move a texture as glTF viewers move it (a
+/// texture atlas: the right half of a red | blue image is the base colour); a rotation is
+/// warned and left out; a texture without the extension is read as before. The extension was
+/// warned as not read, and the whole atlas drawn.
+#[test]
+fn texture_transform_moves_the_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    image::RgbImage::from_fn(8, 1, |x, _| image::Rgb(if x < 4 { [255, 0, 0] } else { [0, 0, 255] }))
+        .save(d.join("atlas.png"))
+        .unwrap();
+    let textured = |transform: Value| {
+        let mut info = json!({"index": 0});
+        if !transform.is_null() {
+            info["extensions"] = json!({"KHR_texture_transform": transform});
+        }
+        json!({"name": "m", "pbrMetallicRoughness": {"baseColorTexture": info, "metallicFactor": 0.0, "roughnessFactor": 1.0}})
+    };
+    let extra = json!({"textures": [{"source": 0}], "images": [{"uri": "atlas.png"}],
+                       "extensionsUsed": ["KHR_texture_transform"]});
+    let colour = |s: &Scene, u: f32| match s.material_at(0, glam::Vec2::new(u, 0.5), Vec3::ONE) {
+        Material::Diffuse { kd } => kd,
+        other => panic!("{other:?}"),
+    };
+    let (red, blue) = (Vec3::X, Vec3::Z);
+    let plain = triangles(d, "plain", json!([textured(Value::Null)]), extra.clone());
+    assert_eq!((colour(&plain, 0.25), colour(&plain, 0.75)), (red, blue));
+    // The right half: u' = 0.5 + 0.5 u.
+    let right = triangles(
+        d,
+        "right",
+        json!([textured(json!({"offset": [0.5, 0.0], "scale": [0.5, 1.0]}))]),
+        extra.clone(),
+    );
+    assert!(right.warnings.iter().all(|w| !w.contains("KHR_texture_transform")), "{:?}", right.warnings);
+    assert_eq!((colour(&right, 0.25), colour(&right, 0.75)), (blue, blue));
+    let turned = triangles(d, "turned", json!([textured(json!({"rotation": 0.5}))]), extra);
+    assert!(
+        turned.warnings.iter().any(|w| w.contains("rotation 0.5 is not applied")),
+        "{:?}",
+        turned.warnings
+    );
+}

@@ -91,20 +91,28 @@ impl Images<'_> {
         factor: Vec3,
         warnings: &mut Warnings,
     ) -> Result<TextureRef, SceneError> {
-        self.reference_to(field, info.texture(), info.tex_coord(), factor, Encoding::Colour, warnings)
+        let (texture, tex_coord, transform) = (info.texture(), info.tex_coord(), Transform::of(info));
+        self.reference_to(field, texture, tex_coord, transform, factor, Encoding::Colour, warnings)
     }
 
-    /// A texture reference for texture `tex` read through `TEXCOORD_<tex_coord>`, its image
-    /// read as `encoding`.
+    /// A texture reference for texture `tex` read through `TEXCOORD_<tex_coord>` and moved by
+    /// `KHR_texture_transform`'s `transform`, its image read as `encoding`.
+    #[allow(clippy::too_many_arguments)] // a textureInfo's parts, and where messages go
     fn reference_to(
         &mut self,
         field: &str,
         tex: gltf::Texture,
         tex_coord: u32,
+        transform: Option<Transform>,
         factor: Vec3,
         encoding: Encoding,
         warnings: &mut Warnings,
     ) -> Result<TextureRef, SceneError> {
+        let (scale, offset) = match transform {
+            None => (Vec2::ONE, Vec2::ZERO),
+            Some(t) => t.scale_offset(self.path, field, warnings)?,
+        };
+        let tex_coord = transform.and_then(|t| t.tex_coord).unwrap_or(tex_coord);
         if tex_coord != 0 {
             warnings.say(
                 format!("texcoord{tex_coord}"),
@@ -125,7 +133,74 @@ impl Images<'_> {
             }
         };
         let texture = self.texture(field, tex.source(), encoding)?;
-        Ok(TextureRef { texture, scale: Vec2::ONE, offset: Vec2::ZERO, wrap, factor })
+        Ok(TextureRef { texture, scale, offset, wrap, factor })
+    }
+}
+
+/// `KHR_texture_transform` on a texture reference: `uv' = offset + R(rotation) (scale ∘ uv)` in
+/// glTF's texture coordinates (`v` down), and the set it reads.
+#[derive(Clone, Copy, Debug)]
+struct Transform {
+    offset: [f32; 2],
+    rotation: f32,
+    scale: [f32; 2],
+    tex_coord: Option<u32>,
+}
+
+impl Transform {
+    /// The transform of a texture reference, if it has one.
+    fn of(info: &gltf::texture::Info) -> Option<Transform> {
+        info.texture_transform().map(|t| Transform {
+            offset: t.offset(),
+            rotation: t.rotation(),
+            scale: t.scale(),
+            tex_coord: t.tex_coord(),
+        })
+    }
+
+    /// The transform from the raw JSON of an extension (for the texture references whose
+    /// type does not read it: `normalTexture`); each number defaults as the extension says.
+    fn from_json(v: &serde_json::Value) -> Transform {
+        let pair = |k: &str, d: f32| {
+            let a = v.get(k).and_then(|x| x.as_array());
+            let at =
+                |i: usize| a.and_then(|a| a.get(i)).and_then(|x| x.as_f64()).map_or(f32::NAN, |x| x as f32);
+            if v.get(k).is_none() {
+                [d, d]
+            } else {
+                [at(0), at(1)]
+            }
+        };
+        Transform {
+            offset: pair("offset", 0.0),
+            rotation: v.get("rotation").map_or(0.0, |x| x.as_f64().map_or(f32::NAN, |x| x as f32)),
+            scale: pair("scale", 1.0),
+            tex_coord: v.get("texCoord").and_then(|x| x.as_u64()).map(|x| x as u32),
+        }
+    }
+
+    /// The scale and offset of our texture coordinates (`v` up: `v = 1 − v_glTF`) that do what
+    /// this does to glTF's: `u' = o_u + s_u u`, `v' = (1 − o_v − s_v) + s_v v`. A rotation is
+    /// warned and left out.
+    fn scale_offset(
+        &self,
+        path: &Path,
+        field: &str,
+        warnings: &mut Warnings,
+    ) -> Result<(Vec2, Vec2), SceneError> {
+        let ext = format!("{field}.extensions.KHR_texture_transform");
+        let numbers = [self.offset[0], self.offset[1], self.scale[0], self.scale[1], self.rotation];
+        if !numbers.iter().all(|x| x.is_finite()) {
+            return Err(at(path, ext, "offset, rotation and scale must be finite numbers"));
+        }
+        if self.rotation != 0.0 {
+            warnings.say(
+                "uv-rotation",
+                format!("{ext}: rotation {} is not applied (offset and scale are)", self.rotation),
+            );
+        }
+        let [(ou, ov), (su, sv)] = [(self.offset[0], self.offset[1]), (self.scale[0], self.scale[1])];
+        Ok((Vec2::new(su, sv), Vec2::new(ou, 1.0 - ov - sv)))
     }
 }
 
@@ -179,10 +254,12 @@ pub fn material(
             if !nt.scale().is_finite() {
                 return Err(at(path, format!("{f}.scale"), format!("{} is not a finite number", nt.scale())));
             }
+            let transform = nt.extension_value("KHR_texture_transform").map(Transform::from_json);
             Some(images.reference_to(
                 &f,
                 nt.texture(),
                 nt.tex_coord(),
+                transform,
                 // The glTF scale of the map's x and y (see `MaterialMaps::normal`).
                 Vec3::new(nt.scale(), nt.scale(), 1.0),
                 Encoding::Data,
@@ -259,6 +336,7 @@ pub fn material(
             &format!("{field}.pbrMetallicRoughness.metallicRoughnessTexture"),
             info.texture(),
             info.tex_coord(),
+            Transform::of(&info),
             Vec3::new(0.0, rough, metal),
             Encoding::Data,
             warnings,
@@ -308,4 +386,26 @@ pub fn material(
         );
     }
     Ok((mtl, maps))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A transform read from raw JSON (a `normalTexture`'s) takes the extension's defaults for
+    /// what it leaves out, and maps to our `v`-up coordinates: `v' = (1 − o_v − s_v) + s_v v`.
+    #[test]
+    fn a_transform_from_json_and_in_our_coordinates() {
+        let t = Transform::from_json(&serde_json::json!({"scale": [2.0, 3.0], "texCoord": 0}));
+        assert_eq!((t.offset, t.rotation, t.scale, t.tex_coord), ([0.0, 0.0], 0.0, [2.0, 3.0], Some(0)));
+        let mut w = Warnings::default();
+        let (scale, offset) =
+            t.scale_offset(Path::new("m.gltf"), "materials[0].normalTexture", &mut w).unwrap();
+        assert_eq!((scale, offset), (Vec2::new(2.0, 3.0), Vec2::new(0.0, -2.0)));
+        // glTF's v = 0.25 is ours 0.75; scaled by 3 in glTF's it is 0.75, ours 0.25.
+        assert!((0.75 * scale.y + offset.y - 0.25).abs() < 1e-6);
+        let bad = Transform::from_json(&serde_json::json!({"offset": ["a", 1]}));
+        let err = bad.scale_offset(Path::new("m.gltf"), "f", &mut w).unwrap_err().to_string();
+        assert!(err.contains("f.extensions.KHR_texture_transform"), "{err}");
+    }
 }

@@ -31,11 +31,12 @@ use std::path::Path;
 pub const CAMERA_HEIGHT: u32 = 256;
 
 /// The extensions read here (others in `extensionsUsed` are named in the warnings).
-const READ: [&str; 4] = [
+const READ: [&str; 5] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
     "KHR_materials_ior",
+    "KHR_texture_transform",
 ];
 
 /// What a glTF file gives the scene.
