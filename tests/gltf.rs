@@ -845,3 +845,36 @@ fn texture_transform_moves_the_texture() {
         turned.warnings
     );
 }
+
+/// `EXT_texture_webp`: a texture whose image is WebP (as `gltf-transform webp` writes it, with
+/// no fallback `source`) is read; a texture with neither is refused naming it. Such files were
+/// refused as a whole.
+#[test]
+fn a_webp_texture_is_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let img = image::RgbImage::from_pixel(4, 4, image::Rgb([255, 0, 0]));
+    let file = std::fs::File::create(d.join("red.webp")).unwrap();
+    image::codecs::webp::WebPEncoder::new_lossless(file)
+        .encode(img.as_raw(), 4, 4, image::ExtendedColorType::Rgb8)
+        .unwrap();
+    let material = json!([{"name": "m", "pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}]);
+    let extra = json!({"textures": [{"extensions": {"EXT_texture_webp": {"source": 0}}}],
+                       "images": [{"uri": "red.webp"}],
+                       "extensionsUsed": ["EXT_texture_webp"], "extensionsRequired": ["EXT_texture_webp"]});
+    let s = triangles(d, "webp", material.clone(), extra);
+    assert!(s.warnings.iter().all(|w| !w.contains("EXT_texture_webp")), "{:?}", s.warnings);
+    assert_eq!(s.material_at(0, glam::Vec2::new(0.5, 0.5), Vec3::ONE), Material::Diffuse { kd: Vec3::X });
+    // Neither a WebP image nor a source: refused, naming the texture.
+    let extra = json!({"textures": [{}], "images": [{"uri": "red.webp"}]});
+    let mut g = Gltf::default();
+    let tri = [Vec3::new(0.0, 0.0, -2.0), Vec3::new(1.0, 0.0, -2.0), Vec3::new(0.0, 1.0, -2.0)];
+    let prim = g.primitive(&tri, None, &[[0, 1, 2]], 0);
+    let mut top = json!({"scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}], "meshes": [{"primitives": [prim]}],
+                         "materials": material});
+    for (k, v) in extra.as_object().unwrap() {
+        top[k] = v.clone();
+    }
+    let err = Scene::load(g.write(d, "empty", top)).err().unwrap().to_string();
+    assert!(err.contains("textures[0]") && err.contains("has no image"), "{err}");
+}

@@ -36,6 +36,7 @@ use std::path::Path;
 /// Images already turned into textures, by glTF image index.
 pub struct Images<'a> {
     pub path: &'a Path,
+    pub doc: &'a gltf::Document,
     pub buffers: &'a Buffers,
     pub textures: &'a mut Textures,
     pub loaded: HashMap<(usize, Encoding), u32>,
@@ -132,7 +133,25 @@ impl Images<'_> {
                 Wrap::Repeat
             }
         };
-        let texture = self.texture(field, tex.source(), encoding)?;
+        // `EXT_texture_webp`'s image where the texture has one (its `source`, if any, is the
+        // fallback for viewers that cannot read WebP).
+        let webp = tex.extension_value("EXT_texture_webp").map(|v| {
+            let i = v.get("source").and_then(|s| s.as_u64()).and_then(|i| usize::try_from(i).ok());
+            i.and_then(|i| self.doc.images().nth(i)).ok_or_else(|| {
+                at(
+                    self.path,
+                    format!("textures[{}].extensions.EXT_texture_webp.source", tex.index()),
+                    "not an image's index",
+                )
+            })
+        });
+        let image = match (webp.transpose()?, tex.source()) {
+            (Some(image), _) | (None, Some(image)) => image,
+            (None, None) => {
+                return Err(at(self.path, format!("textures[{}]", tex.index()), "has no image (source)"))
+            }
+        };
+        let texture = self.texture(field, image, encoding)?;
         Ok(TextureRef { texture, scale, offset, wrap, factor })
     }
 }

@@ -31,12 +31,13 @@ use std::path::Path;
 pub const CAMERA_HEIGHT: u32 = 256;
 
 /// The extensions read here (others in `extensionsUsed` are named in the warnings).
-const READ: [&str; 5] = [
+const READ: [&str; 6] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_texture_transform",
+    "EXT_texture_webp",
 ];
 
 /// What a glTF file gives the scene.
@@ -99,7 +100,8 @@ pub fn load(path: &Path, textures: &mut Textures) -> Result<GltfData, SceneError
     }
     let mut out = GltfData::default();
     let names = material_names(path, &doc);
-    let mut images = material::Images { path, buffers: &buffers, textures, loaded: HashMap::new() };
+    let mut images =
+        material::Images { path, doc: &doc, buffers: &buffers, textures, loaded: HashMap::new() };
     for (m, name) in doc.materials().zip(&names) {
         let field = format!("materials[{}]", m.index().unwrap_or(0));
         let (mtl, maps) = material::material(&field, name, &m, &mut images, &mut w)?;
