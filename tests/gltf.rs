@@ -876,5 +876,61 @@ fn a_webp_texture_is_read() {
         top[k] = v.clone();
     }
     let err = Scene::load(g.write(d, "empty", top)).err().unwrap().to_string();
-    assert!(err.contains("textures[0]") && err.contains("has no image"), "{err}");
+    assert!(err.contains("textures[0]") && err.contains("has no image photonmap reads"), "{err}");
+}
+
+/// `KHR_mesh_quantization` (what `gltfpack` and `gltf-transform quantize` write): positions
+/// as shorts scaled back by their node, normals as normalised bytes, texture coordinates as
+/// normalised unsigned shorts. Such files were refused (positions had to be floats).
+#[test]
+fn quantized_meshes_are_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut g = Gltf::default();
+    let accessor = |g: &mut Gltf, bytes: Vec<u8>, ty: u32, normalized: bool, kind: &str| {
+        let view = g.view(&bytes);
+        g.accessors.push(json!({"bufferView": view, "componentType": ty, "normalized": normalized,
+                                "count": 3, "type": kind}));
+        g.accessors.len() - 1
+    };
+    // Shorts (5122), a VEC3 padded to 8 bytes as glTF aligns vertex attributes.
+    let shorts: Vec<u8> = [[0i16, 0, 0, 0], [1000, 0, 0, 0], [0, 1000, 0, 0]]
+        .iter()
+        .flatten()
+        .flat_map(|x| x.to_le_bytes())
+        .collect();
+    let position = accessor(&mut g, shorts, 5122, false, "VEC3");
+    g.accessors[position]["min"] = json!([0, 0, 0]);
+    g.accessors[position]["max"] = json!([1000, 1000, 0]);
+    g.views[g.accessors[position]["bufferView"].as_u64().unwrap() as usize]["byteStride"] = json!(8);
+    let normal = accessor(
+        &mut g,
+        [[0i8, 0, 127, 0]; 3].iter().flatten().map(|&x| x as u8).collect(),
+        5120,
+        true,
+        "VEC3",
+    );
+    g.views[g.accessors[normal]["bufferView"].as_u64().unwrap() as usize]["byteStride"] = json!(4);
+    let uv: Vec<u8> =
+        [[0u16, 0], [65535, 0], [0, 65535]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    let texcoord = accessor(&mut g, uv, 5123, true, "VEC2");
+    let indices = g.indices(&[0, 1, 2]);
+    let prim = json!({"attributes": {"POSITION": position, "NORMAL": normal, "TEXCOORD_0": texcoord},
+                      "indices": indices});
+    let top = json!({
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "scale": [0.001, 0.001, 0.001], "translation": [0.0, 0.0, -2.0]}],
+        "meshes": [{"primitives": [prim]}],
+        "extensionsUsed": ["KHR_mesh_quantization"], "extensionsRequired": ["KHR_mesh_quantization"],
+    });
+    let s = Scene::load(g.write(d, "quantized", top)).unwrap();
+    assert!(s.warnings.iter().all(|w| !w.contains("KHR_mesh_quantization")), "{:?}", s.warnings);
+    let p = &s.mesh.positions;
+    assert!(
+        (p[1] - Vec3::new(1.0, 0.0, -2.0)).length() < 1e-6
+            && (p[2] - Vec3::new(0.0, 1.0, -2.0)).length() < 1e-6,
+        "{p:?}"
+    );
+    assert_eq!(s.attributes.normals[0], Vec3::Z);
+    assert_eq!(s.attributes.uvs[1], glam::Vec2::new(1.0, 1.0));
 }

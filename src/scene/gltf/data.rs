@@ -115,7 +115,6 @@ struct Packed {
     count: usize,
     ty: DataType,
     components: usize,
-    normalized: bool,
 }
 
 fn component_size(ty: DataType) -> usize {
@@ -214,18 +213,19 @@ fn pack(path: &Path, field: &str, buffers: &Buffers, a: &gltf::Accessor) -> Resu
             bytes[i * elem..(i + 1) * elem].copy_from_slice(&vals[k * elem..(k + 1) * elem]);
         }
     }
-    Ok(Packed { bytes, count, ty, components, normalized: a.normalized() })
+    Ok(Packed { bytes, count, ty, components })
 }
 
 /// Reads accessor `a` (at JSON path `field`) as `n`-component float vectors: floats as they
-/// are, normalised integers mapped to `[0, 1]` or `[-1, 1]` (glTF 2.0 §3.11). `allowed`
-/// lists the component types the attribute may have; anything else is an error naming it.
+/// are, normalised integers mapped to `[0, 1]` or `[-1, 1]` (glTF 2.0 §3.11), integers not
+/// normalised as their values (`KHR_mesh_quantization`). `allowed` lists the component types
+/// the attribute may have, each with whether normalised; anything else is an error naming it.
 pub fn read_floats<const N: usize>(
     path: &Path,
     field: &str,
     buffers: &Buffers,
     a: &gltf::Accessor,
-    allowed: &[DataType],
+    allowed: &[(DataType, bool)],
 ) -> Result<Vec<[f32; N]>, SceneError> {
     let dims = match N {
         2 => Dimensions::Vec2,
@@ -239,7 +239,8 @@ pub fn read_floats<const N: usize>(
             format!("accessor {} is {:?}, expected {dims:?}", a.index(), a.dimensions()),
         ));
     }
-    if !allowed.contains(&a.data_type()) || (a.data_type() != DataType::F32 && !a.normalized()) {
+    let normalized = a.normalized() && a.data_type() != DataType::F32;
+    if !allowed.contains(&(a.data_type(), normalized)) {
         return Err(at(
             path,
             field,
@@ -252,19 +253,21 @@ pub fn read_floats<const N: usize>(
         ));
     }
     let p = pack(path, field, buffers, a)?;
-    debug_assert!(p.components == N && (p.normalized || p.ty == DataType::F32));
+    debug_assert!(p.components == N);
     let csize = component_size(p.ty);
     let mut out = Vec::with_capacity(p.count);
+    // Normalised integers are divided by their largest value (signed ones clamped at -1).
+    let norm = |x: f32, most: f32| if normalized { (x / most).max(-1.0) } else { x };
     for e in p.bytes.chunks_exact(csize * N) {
         let mut v = [0.0f32; N];
         for (k, c) in e.chunks_exact(csize).enumerate() {
             v[k] = match p.ty {
                 DataType::F32 => f32::from_le_bytes([c[0], c[1], c[2], c[3]]),
-                DataType::U8 => c[0] as f32 / 255.0,
-                DataType::I8 => (c[0] as i8 as f32 / 127.0).max(-1.0),
-                DataType::U16 => u16::from_le_bytes([c[0], c[1]]) as f32 / 65535.0,
-                DataType::I16 => (i16::from_le_bytes([c[0], c[1]]) as f32 / 32767.0).max(-1.0),
-                DataType::U32 => u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32 / u32::MAX as f32,
+                DataType::U8 => norm(c[0] as f32, 255.0),
+                DataType::I8 => norm(c[0] as i8 as f32, 127.0),
+                DataType::U16 => norm(u16::from_le_bytes([c[0], c[1]]) as f32, 65535.0),
+                DataType::I16 => norm(i16::from_le_bytes([c[0], c[1]]) as f32, 32767.0),
+                DataType::U32 => norm(u32::from_le_bytes([c[0], c[1], c[2], c[3]]) as f32, u32::MAX as f32),
             };
         }
         if v.iter().any(|x| !x.is_finite()) {

@@ -148,7 +148,7 @@ impl Images<'_> {
         let image = match (webp.transpose()?, tex.source()) {
             (Some(image), _) | (None, Some(image)) => image,
             (None, None) => {
-                return Err(at(self.path, format!("textures[{}]", tex.index()), "has no image (source)"))
+                return Err(at(self.path, format!("textures[{}]", tex.index()), "has no image photonmap reads (a `source`, or EXT_texture_webp's; KTX2 and DDS images are not read)"))
             }
         };
         let texture = self.texture(field, image, encoding)?;

@@ -31,13 +31,31 @@ use std::path::Path;
 pub const CAMERA_HEIGHT: u32 = 256;
 
 /// The extensions read here (others in `extensionsUsed` are named in the warnings).
-const READ: [&str; 6] = [
+/// The component types (and whether normalised) of positions and texture coordinates: floats,
+/// and with `KHR_mesh_quantization` bytes and shorts, signed or not, normalised or not.
+const QUANTIZED: [(DataType, bool); 9] = [
+    (DataType::F32, false),
+    (DataType::I8, false),
+    (DataType::I8, true),
+    (DataType::U8, false),
+    (DataType::U8, true),
+    (DataType::I16, false),
+    (DataType::I16, true),
+    (DataType::U16, false),
+    (DataType::U16, true),
+];
+
+/// Of normals: floats, and with `KHR_mesh_quantization` normalised signed bytes and shorts.
+const NORMALS: [(DataType, bool); 3] = [(DataType::F32, false), (DataType::I8, true), (DataType::I16, true)];
+
+const READ: [&str; 7] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_texture_transform",
     "EXT_texture_webp",
+    "KHR_mesh_quantization",
 ];
 
 /// What a glTF file gives the scene.
@@ -185,8 +203,10 @@ fn parse(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
     } else {
         (bytes.to_vec(), None)
     };
-    let root = gltf::json::Root::from_slice(&json)
+    let mut root = gltf::json::Root::from_slice(&json)
         .map_err(|e| SceneError::file(path, format!("malformed glTF JSON: {e}")))?;
+    // Read here, but not among the extensions the `gltf` crate lets a file require.
+    root.extensions_required.retain(|e| e != "KHR_mesh_quantization");
     // The `gltf` crate's own validation indexes the accessors with each primitive's POSITION
     // before checking it (gltf-json 1.4.1, `primitive_validate_hook`): check that first.
     for (m, mesh) in root.meshes.iter().enumerate() {
@@ -346,7 +366,7 @@ fn add_mesh(
         }
         let attr = |name: &str| format!("{f}.attributes[\"{name}\"]");
         let pos = prim.get(&Semantic::Positions).ok_or_else(|| at(path, attr("POSITION"), "missing"))?;
-        let positions = read_floats::<3>(path, &attr("POSITION"), buffers, &pos, &[DataType::F32])?;
+        let positions = read_floats::<3>(path, &attr("POSITION"), buffers, &pos, &QUANTIZED)?;
         let n = positions.len();
         let same_count = |name: &str, len: usize| {
             if len == n {
@@ -357,7 +377,7 @@ fn add_mesh(
         };
         let normals = match prim.get(&Semantic::Normals) {
             Some(a) => {
-                let v = read_floats::<3>(path, &attr("NORMAL"), buffers, &a, &[DataType::F32])?;
+                let v = read_floats::<3>(path, &attr("NORMAL"), buffers, &a, &NORMALS)?;
                 same_count("NORMAL", v.len())?;
                 v
             }
@@ -365,8 +385,7 @@ fn add_mesh(
         };
         let uvs = match prim.get(&Semantic::TexCoords(0)) {
             Some(a) => {
-                let allowed = [DataType::F32, DataType::U8, DataType::U16];
-                let v = read_floats::<2>(path, &attr("TEXCOORD_0"), buffers, &a, &allowed)?;
+                let v = read_floats::<2>(path, &attr("TEXCOORD_0"), buffers, &a, &QUANTIZED)?;
                 same_count("TEXCOORD_0", v.len())?;
                 v
             }
@@ -375,7 +394,7 @@ fn add_mesh(
         // Vertex colours (linear, RGB or RGBA: the alpha is not read) multiply the base colour.
         let colours = match prim.get(&Semantic::Colors(0)) {
             Some(a) => {
-                let allowed = [DataType::F32, DataType::U8, DataType::U16];
+                let allowed = [(DataType::F32, false), (DataType::U8, true), (DataType::U16, true)];
                 let name = attr("COLOR_0");
                 let v: Vec<[f32; 3]> = if a.dimensions() == gltf::accessor::Dimensions::Vec4 {
                     let rgba = read_floats::<4>(path, &name, buffers, &a, &allowed)?;
