@@ -686,10 +686,12 @@ def shiny_room(name, desc, shiny, notes):
     # `shiny` names ("floor", "tall", "short", "ball"), lit by the room's ceiling light.
     room = read_cornell_room()
     for p in room:
-        kinds = [k for k, hit in (("floor", p.name.startswith("floor")), ("tall", "tall" in p.name),
-                                  ("short", "short" in p.name)) if hit]
-        for part in kinds[:1]:
-            p.material = shiny[part][0]
+        if p.name.startswith("floor"):
+            p.material = shiny["floor"][0]
+        elif "tall" in p.name:
+            p.material = shiny["tall"][0]
+        elif "short" in p.name:
+            p.material = shiny["short"][0]
     ball = Part("ball", shiny["ball"][0])
     uv_sphere(ball, (0.186, 0.165 + 0.0701, 0.169), 0.07, 48, 96)
     check_closed([ball], "ball")

@@ -327,9 +327,10 @@ impl Material {
     /// `1 - p_diffuse - p_specular` (Jensen 2001, 5.2). With `Some(ch)` they come from that
     /// channel's reflectances (one photon map per channel); with `None` (RGB photons) from the
     /// maximum over channels. "Diffuse" means any non-delta bounce (the photon is stored before
-    /// it): Diffuse/Emissive `(kd, 0)`; Glossy `(kd + ks, 0)` and principled `(kd + F0, 0)` — the Phong lobe is non-delta, so it
-    /// shares the diffuse branch and [`Material::sample`] then picks kd vs ks itself; Mirror
-    /// `(0, ks)`; Glass `(0, 1)` (no absorption; Fresnel picks reflect vs refract).
+    /// it): Diffuse/Emissive `(kd, 0)`; Glossy `(kd + ks, 0)` and principled `(kd + F0, 0)` —
+    /// their lobes are non-delta, so they share the diffuse branch and [`Material::sample`]
+    /// then picks the lobe itself; Mirror `(0, ks)`; Glass `(0, 1)` (no absorption; Fresnel
+    /// picks reflect vs refract).
     pub fn photon_probabilities(&self, channel: Option<usize>) -> (f32, f32) {
         let (d, s) = match *self {
             Material::Diffuse { kd } | Material::Emissive { kd, .. } => (channel_or_max(kd, channel), 0.0),

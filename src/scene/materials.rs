@@ -431,12 +431,6 @@ impl MetalRough {
             kind => kind.material(base, metal, rough),
         }
     }
-
-    /// The textures it reads, each once.
-    pub fn textures(&self) -> impl Iterator<Item = TextureRef> {
-        let (r, m) = (self.roughness.texture(), self.metallic.texture());
-        r.into_iter().chain(m.filter(|m| Some(*m) != r))
-    }
 }
 
 /// The textures of one material: each replaces the constant it is named after (an MTL
